@@ -1,0 +1,32 @@
+#pragma once
+// Elementwise and reduction kernels (row-parallel over strided tensors).
+#include "gatcore/tensor.hpp"
+
+namespace gatcore::cpu {
+
+enum class Activation { identity, tanh, tanhshrink, leaky_relu, relu };
+
+// y = f(x); `slope` is the LeakyReLU negative slope.
+void activation_forward(Activation f, const Tensor& x, const Tensor& y, float slope = 0.01f);
+// d_x += f'(x) ⊙ d_y  (uses x and/or y, whichever the derivative needs)
+void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x,
+                         float slope = 0.01f);
+
+// y = alpha*a + beta*b      (y may alias a or b)
+void axpby(float alpha, const Tensor& a, float beta, const Tensor& b, const Tensor& y);
+// y += alpha * x
+void axpy(float alpha, const Tensor& x, const Tensor& y);
+// y = a ⊙ b
+void mul(const Tensor& a, const Tensor& b, const Tensor& y);
+// d_a += b ⊙ d_y  (and symmetric for b, by the caller)
+void mul_accumulate(const Tensor& b, const Tensor& d_y, const Tensor& d_a);
+// y[i,:] += bias[0,:]   (bias: [1, C])
+void add_row_bias(const Tensor& bias, const Tensor& y);
+// d_bias[0,c] += Σ_i d_y[i,c]   (deterministic blocked column sums)
+void column_sums_accumulate(const Tensor& d_y, const Tensor& d_bias);
+// Σ of all entries in double precision.
+double sum_all(const Tensor& x);
+// y = value  (alias for fill without the version bump semantics of Tensor::fill_)
+void fill(const Tensor& y, float value);
+
+}  // namespace gatcore::cpu

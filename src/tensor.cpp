@@ -1,0 +1,173 @@
+#include "gatcore/tensor.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+namespace gatcore {
+
+const char* device_name(Device d) {
+  switch (d) {
+    case Device::cpu: return "cpu";
+    case Device::vulkan: return "vulkan";
+  }
+  return "?";
+}
+
+Storage::~Storage() {
+  if (release) release(*this);
+}
+
+static void release_cpu(Storage& s) { std::free(s.host); }
+
+std::shared_ptr<Storage> Storage::allocate_cpu(std::size_t bytes) {
+  auto s = std::make_shared<Storage>();
+  // 64-byte alignment (one cache line / one AVX-512 register); aligned_alloc
+  // needs a multiple of the alignment.
+  std::size_t rounded = (bytes + 63) / 64 * 64;
+  if (rounded == 0) rounded = 64;
+  s->host = std::aligned_alloc(64, rounded);
+  if (!s->host) throw Error(detail::cat("gatcore: out of memory allocating ", bytes, " bytes"));
+  s->bytes = bytes;
+  s->device = Device::cpu;
+  s->release = release_cpu;
+  return s;
+}
+
+Tensor Tensor::wrap(std::shared_ptr<Storage> s, DType dt, std::int64_t offset, std::int64_t rows,
+                    std::int64_t cols, std::int64_t ld) {
+  Tensor t;
+  t.storage_ = std::move(s);
+  t.dtype_ = dt;
+  t.offset_ = offset;
+  t.rows_ = rows;
+  t.cols_ = cols;
+  t.ld_ = ld;
+  return t;
+}
+
+Tensor Tensor::empty(std::int64_t rows, std::int64_t cols, DType dt) {
+  GATCORE_CHECK(rows >= 0 && cols >= 0, "Tensor::empty: negative shape [", rows, ", ", cols, "]");
+  auto s = Storage::allocate_cpu(static_cast<std::size_t>(rows * cols) * 4);
+  return wrap(std::move(s), dt, 0, rows, cols, cols);
+}
+
+Tensor Tensor::zeros(std::int64_t rows, std::int64_t cols, DType dt) {
+  Tensor t = empty(rows, cols, dt);
+  if (rows * cols) std::memset(t.storage_->host, 0, static_cast<std::size_t>(rows * cols) * 4);
+  return t;
+}
+
+Tensor Tensor::full(std::int64_t rows, std::int64_t cols, float value) {
+  Tensor t = empty(rows, cols);
+  float* p = t.data();
+  for (std::int64_t i = 0; i < rows * cols; ++i) p[i] = value;
+  return t;
+}
+
+Tensor Tensor::from(std::int64_t rows, std::int64_t cols, const std::vector<float>& values) {
+  GATCORE_CHECK(static_cast<std::int64_t>(values.size()) == rows * cols, "Tensor::from: ",
+                values.size(), " values given for shape [", rows, ", ", cols, "]");
+  Tensor t = empty(rows, cols);
+  if (!values.empty()) std::memcpy(t.data(), values.data(), values.size() * 4);
+  return t;
+}
+
+Tensor Tensor::from(std::int64_t rows, std::int64_t cols, std::initializer_list<float> values) {
+  return from(rows, cols, std::vector<float>(values));
+}
+
+Tensor Tensor::from_i32(std::int64_t rows, std::int64_t cols, const std::vector<std::int32_t>& values) {
+  GATCORE_CHECK(static_cast<std::int64_t>(values.size()) == rows * cols, "Tensor::from_i32: ",
+                values.size(), " values given for shape [", rows, ", ", cols, "]");
+  Tensor t = empty(rows, cols, DType::i32);
+  if (!values.empty()) std::memcpy(t.data_i32(), values.data(), values.size() * 4);
+  return t;
+}
+
+std::string Tensor::shape_str() const { return detail::cat("[", rows_, ", ", cols_, "]"); }
+
+float* Tensor::data() const {
+  if (!storage_) return nullptr;
+  GATCORE_CHECK(dtype_ == DType::f32, "tensor ", shape_str(), " is int32, not float32");
+  GATCORE_CHECK(storage_->host != nullptr, "tensor ", shape_str(), " lives on device ",
+                device_name(storage_->device), " and is not host-addressable; move it with to(Device::cpu)");
+  return static_cast<float*>(storage_->host) + offset_;
+}
+
+std::int32_t* Tensor::data_i32() const {
+  if (!storage_) return nullptr;
+  GATCORE_CHECK(dtype_ == DType::i32, "tensor ", shape_str(), " is float32, not int32");
+  GATCORE_CHECK(storage_->host != nullptr, "tensor ", shape_str(), " lives on device ",
+                device_name(storage_->device), " and is not host-addressable; move it with to(Device::cpu)");
+  return static_cast<std::int32_t*>(storage_->host) + offset_;
+}
+
+Tensor Tensor::cols_slice(std::int64_t c0, std::int64_t c1) const {
+  GATCORE_CHECK(0 <= c0 && c0 <= c1 && c1 <= cols_, "cols_slice(", c0, ", ", c1,
+                ") out of range for tensor ", shape_str());
+  return wrap(storage_, dtype_, offset_ + c0, rows_, c1 - c0, ld_);
+}
+
+Tensor Tensor::rows_slice(std::int64_t r0, std::int64_t r1) const {
+  GATCORE_CHECK(0 <= r0 && r0 <= r1 && r1 <= rows_, "rows_slice(", r0, ", ", r1,
+                ") out of range for tensor ", shape_str());
+  return wrap(storage_, dtype_, offset_ + r0 * ld_, r1 - r0, cols_, ld_);
+}
+
+Tensor Tensor::clone() const {
+  Tensor t = empty(rows_, cols_, dtype_);
+  const char* src = static_cast<const char*>(storage_ ? storage_->host : nullptr);
+  GATCORE_CHECK(rows_ * cols_ == 0 || src, "clone: tensor on ", device_name(device()), " is not host-addressable");
+  for (std::int64_t r = 0; r < rows_; ++r)
+    std::memcpy(static_cast<char*>(t.storage_->host) + r * cols_ * 4, src + (offset_ + r * ld_) * 4,
+                static_cast<std::size_t>(cols_) * 4);
+  return t;
+}
+
+std::vector<float> Tensor::to_vector() const {
+  std::vector<float> v(static_cast<std::size_t>(numel()));
+  for (std::int64_t r = 0; r < rows_; ++r)
+    for (std::int64_t c = 0; c < cols_; ++c) v[r * cols_ + c] = at(r, c);
+  return v;
+}
+
+void Tensor::fill_(float v) const {
+  float* p = data();
+  for (std::int64_t r = 0; r < rows_; ++r)
+    for (std::int64_t c = 0; c < cols_; ++c) p[r * ld_ + c] = v;
+  bump_version();
+}
+
+void Tensor::copy_from_(const Tensor& src) const {
+  GATCORE_CHECK(same_shape(src), "copy_from_: shape ", src.shape_str(), " into ", shape_str());
+  float* d = data();
+  const float* s = src.data();
+  for (std::int64_t r = 0; r < rows_; ++r) std::memcpy(d + r * ld_, s + r * src.ld_, cols_ * 4);
+  bump_version();
+}
+
+void Tensor::check_finite(const char* what) const {
+  const float* p = data();
+  for (std::int64_t r = 0; r < rows_; ++r)
+    for (std::int64_t c = 0; c < cols_; ++c)
+      if (!std::isfinite(p[r * ld_ + c]))
+        throw InvalidArgument(detail::cat(what, ": non-finite value ", p[r * ld_ + c], " at row ", r,
+                                          ", column ", c));
+}
+
+void check_shape(const Tensor& t, std::int64_t rows, std::int64_t cols, const char* what) {
+  GATCORE_CHECK(t.defined(), what, ": tensor is undefined");
+  GATCORE_CHECK((rows < 0 || t.rows() == rows) && (cols < 0 || t.cols() == cols), what, ": expected shape [",
+                rows < 0 ? std::string("*") : std::to_string(rows), ", ",
+                cols < 0 ? std::string("*") : std::to_string(cols), "], got ", t.shape_str());
+}
+
+void check_cpu_f32(const Tensor& t, const char* what) {
+  GATCORE_CHECK(t.defined(), what, ": tensor is undefined");
+  GATCORE_CHECK(t.device() == Device::cpu, what, ": tensor lives on ", device_name(t.device()),
+                ", this kernel runs on the CPU");
+  GATCORE_CHECK(t.dtype() == DType::f32, what, ": expected float32");
+}
+
+}  // namespace gatcore
