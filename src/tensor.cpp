@@ -54,7 +54,7 @@ Tensor Tensor::empty(std::int64_t rows, std::int64_t cols, DType dt) {
 
 Tensor Tensor::zeros(std::int64_t rows, std::int64_t cols, DType dt) {
   Tensor t = empty(rows, cols, dt);
-  if (rows * cols) std::memset(t.storage_->host, 0, static_cast<std::size_t>(rows * cols) * 4);
+  if (rows * cols != 0) std::memset(t.storage_->host, 0, static_cast<std::size_t>(rows * cols) * 4);
   return t;
 }
 
