@@ -1,10 +1,11 @@
 #pragma once
 // Elementwise and reduction kernels (row-parallel over strided tensors).
+#include "gatcore/activation.hpp"
 #include "gatcore/tensor.hpp"
 
 namespace gatcore::cpu {
 
-enum class Activation { identity, tanh, tanhshrink, leaky_relu, relu };
+using gatcore::Activation;  // include/gatcore/activation.hpp
 
 // y = f(x); `slope` is the LeakyReLU negative slope.
 void activation_forward(Activation f, const Tensor& x, const Tensor& y, float slope = 0.01f);
