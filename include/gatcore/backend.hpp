@@ -26,6 +26,9 @@ class Backend {
   virtual Tensor zeros(std::int64_t rows, std::int64_t cols, DType dt = DType::f32) = 0;
   virtual void fill(const Tensor& y, float value) = 0;
   virtual void copy(const Tensor& src, const Tensor& dst) = 0;  // same shape, strided
+  // Transfers: a device copy of a CPU tensor, and a CPU copy of a device one.
+  virtual Tensor from_host(const Tensor& host) = 0;
+  virtual Tensor to_host(const Tensor& t) = 0;
 
   // Dense algebra.
   virtual void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
