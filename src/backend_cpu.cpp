@@ -11,6 +11,7 @@
 #include "kernels/gat_fused.hpp"
 #include "kernels/gemm.hpp"
 #include "kernels/loss.hpp"
+#include "kernels/optimizer.hpp"
 #include "kernels/pooling.hpp"
 #include "kernels/row_softmax.hpp"
 
@@ -112,6 +113,11 @@ class CpuBackend final : public Backend {
   void kl_div_backward(const Tensor& pred, const Tensor& target, float eps, const Tensor& d_out,
                        const Tensor& d_pred) override {
     cpu::kl_div_backward(pred, target, eps, d_out.at(0, 0), d_pred);
+  }
+
+  void adam_update(const Tensor& param, const Tensor& grad, const Tensor& m, const Tensor& v, float lr, float beta1,
+                   float beta2, float eps, float weight_decay, long step) override {
+    cpu::adam_update(param, grad, m, v, lr, beta1, beta2, eps, weight_decay, step);
   }
 
   void attention_projection_forward(const Tensor& z, const Tensor& a_l, const Tensor& a_r, const Tensor& el,
