@@ -211,6 +211,11 @@ void register_backend(Backend* b) {
   g_backends[static_cast<std::size_t>(b->device())] = b;
 }
 
+void unregister_backend(Device d) {
+  GATCORE_CHECK(d != Device::cpu, "unregister_backend: the CPU backend is always present");
+  g_backends[static_cast<std::size_t>(d)] = nullptr;
+}
+
 bool has_backend(Device d) { return g_backends[static_cast<std::size_t>(d)] != nullptr; }
 
 Tensor to(const Tensor& t, Device d) {

@@ -119,6 +119,8 @@ Backend& backend(Device d);
 // Registers (or replaces) the backend of its device; the pointer must outlive its use.
 void register_backend(Backend* b);
 bool has_backend(Device d);
+// Removes the backend of a device (not the CPU one); tests use it.
+void unregister_backend(Device d);
 
 // Moves / copies a tensor to another device (a no-op view when already there).
 Tensor to(const Tensor& t, Device d);
