@@ -141,9 +141,21 @@ void Tensor::fill_(float v) const {
 
 void Tensor::copy_from_(const Tensor& src) const {
   GATCORE_CHECK(same_shape(src), "copy_from_: shape ", src.shape_str(), " into ", shape_str());
-  float* d = data();
-  const float* s = src.data();
-  for (std::int64_t r = 0; r < rows_; ++r) std::memcpy(d + r * ld_, s + r * src.ld_, cols_ * 4);
+  GATCORE_CHECK(dtype_ == src.dtype_, "copy_from_: ", src.dtype_ == DType::i32 ? "int32" : "float32", " tensor ",
+                src.shape_str(), " into a ", dtype_ == DType::i32 ? "int32" : "float32", " tensor");
+  // Both dtypes are 4 bytes; data() / data_i32() check host addressability.
+  char* d = reinterpret_cast<char*>(dtype_ == DType::i32 ? static_cast<void*>(data_i32()) : data());
+  const char* s =
+      reinterpret_cast<const char*>(dtype_ == DType::i32 ? static_cast<void*>(src.data_i32()) : src.data());
+  const std::size_t row_bytes = static_cast<std::size_t>(cols_) * 4;
+  // memmove per row, and rows in the order that never reads a row already
+  // overwritten, so overlapping views of one storage copy correctly.
+  if (row_bytes != 0) {
+    if (d > s)
+      for (std::int64_t r = rows_ - 1; r >= 0; --r) std::memmove(d + r * ld_ * 4, s + r * src.ld_ * 4, row_bytes);
+    else if (d < s)
+      for (std::int64_t r = 0; r < rows_; ++r) std::memmove(d + r * ld_ * 4, s + r * src.ld_ * 4, row_bytes);
+  }
   bump_version();
 }
 

@@ -1,0 +1,184 @@
+// GEMM through Eigen (the library's GEMM for now).
+//
+// SIMD: Eigen picks its SIMD code at compile time and the library is built
+// without -march flags, so Eigen is compiled three times: here for the
+// baseline (SSE2), and in gemm_avx2.cpp / gemm_avx512.cpp with those targets
+// enabled; gemm() picks one from cpu::simd_level(). Each build renames the
+// Eigen namespace, so no template instantiation is shared between builds (or
+// with other code of the program that uses Eigen).
+//
+// Threads: Eigen's own OpenMP GEMM is not deterministic across thread counts
+// (its k-blocking depends on the number of threads, and a row's micro-kernel
+// path depends on where the per-thread split falls), so the builds are
+// compiled with EIGEN_DONT_PARALLELIZE and gemm() threads itself: C is cut
+// into fixed tiles (independent of the thread count), each tile is one serial
+// Eigen product, and the tiles are spread over the OpenMP threads. Every
+// element of C is then computed the same way whatever the thread count.
+#include "kernels/gemm.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "kernels/gemm_impl.hpp"
+#include "kernels/nn_detail.hpp"
+#include "kernels/simd.hpp"
+
+#include "kernels/gemm_eigen_target_begin.inc"
+#define EIGEN_DONT_PARALLELIZE 1
+#define Eigen gatcore_eigen_baseline
+#include <Eigen/Core>
+#define GATCORE_GEMM_FN gemm_eigen_baseline
+#define GATCORE_GEMM_ISA_FN gemm_eigen_isa_baseline
+#include "kernels/gemm_eigen_impl.inc"
+#undef GATCORE_GEMM_FN
+#undef GATCORE_GEMM_ISA_FN
+#undef Eigen
+
+namespace gatcore::cpu {
+
+using detail::views_overlap;
+
+namespace {
+// Tile of C per serial Eigen call. Large enough that re-packing the panels of
+// A and B per tile costs < 1% of the product, small enough to give 2 threads
+// several tiles on the layer shapes of DenseGATs (n ~ 10^4 rows, 64..512 columns).
+#ifndef GATCORE_GEMM_TILE_M  // (overridable for tuning experiments)
+#define GATCORE_GEMM_TILE_M 512
+#endif
+#ifndef GATCORE_GEMM_TILE_N
+#define GATCORE_GEMM_TILE_N 512
+#endif
+constexpr std::int64_t kTileM = GATCORE_GEMM_TILE_M;
+constexpr std::int64_t kTileN = GATCORE_GEMM_TILE_N;
+// Split k into at most kSplitKMax chunks of >= kSplitKMinChunk when C has
+// fewer than kSplitKBelowTiles tiles.
+constexpr std::int64_t kSplitKBelowTiles = 4;
+constexpr std::int64_t kSplitKMinChunk = 1024;
+constexpr std::int64_t kSplitKMax = 8;
+// Below this many flops one thread does all tiles (same result, less overhead).
+constexpr double kParallelMinFlops = 4.0e6;
+}  // namespace
+
+void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha, float beta) {
+  check_cpu_f32(A, "gemm: A");
+  check_cpu_f32(B, "gemm: B");
+  check_cpu_f32(C, "gemm: C");
+  const std::int64_t m = trans_a ? A.cols() : A.rows();
+  const std::int64_t k = trans_a ? A.rows() : A.cols();
+  const std::int64_t kb = trans_b ? B.cols() : B.rows();
+  const std::int64_t n = trans_b ? B.rows() : B.cols();
+  GATCORE_CHECK(k == kb, "gemm: B: inner dimensions differ: op(A) is [", m, ", ", k, "] (A ", A.shape_str(),
+                trans_a ? " transposed" : "", "), op(B) is [", kb, ", ", n, "] (B ", B.shape_str(),
+                trans_b ? " transposed" : "", ")");
+  GATCORE_CHECK(C.rows() == m && C.cols() == n, "gemm: C: expected shape [", m, ", ", n, "], got ", C.shape_str());
+  GATCORE_CHECK(!views_overlap(C, A), "gemm: C ", C.shape_str(), " overlaps A ", A.shape_str(),
+                " (the output must not alias an input)");
+  GATCORE_CHECK(!views_overlap(C, B), "gemm: C ", C.shape_str(), " overlaps B ", B.shape_str(),
+                " (the output must not alias an input)");
+  if (m == 0 || n == 0) return;
+
+  detail::GemmArgs g{A.data(), A.rows(),  A.cols(), std::max<std::int64_t>(A.ld(), 1), trans_a,
+                     B.data(), B.rows(),  B.cols(), std::max<std::int64_t>(B.ld(), 1), trans_b,
+                     C.data(), m,         n,        C.ld(),                            alpha,
+                     beta};
+  if (k == 0 || alpha == 0.0f) {
+    // No product: C = beta C (beta = 0 overwrites, ignoring NaN in C).
+    for (std::int64_t r = 0; r < m; ++r) {
+      float* c = C.row(r);
+      if (beta == 0.0f)
+        std::fill(c, c + n, 0.0f);
+      else
+        for (std::int64_t j = 0; j < n; ++j) c[j] *= beta;
+    }
+    return;
+  }
+  using Fn = void (*)(const detail::GemmArgs&);
+  Fn fn = &detail::gemm_eigen_baseline;
+#if defined(__x86_64__) && defined(__GNUC__)
+  switch (simd_level()) {
+    case SimdLevel::avx512: fn = &detail::gemm_eigen_avx512; break;
+    case SimdLevel::avx2: fn = &detail::gemm_eigen_avx2; break;
+    case SimdLevel::scalar: break;
+  }
+#endif
+  // Fixed tiling of C, and a fixed split of k when C has too few tiles to
+  // keep the threads busy (weight gradients X^T dY: small C, long k). Both
+  // are functions of the shape only.
+  const std::int64_t tiles_m = (m + kTileM - 1) / kTileM, tiles_n = (n + kTileN - 1) / kTileN;
+  const std::int64_t tiles = tiles_m * tiles_n;
+  const double flops = 2.0 * double(m) * double(n) * double(k);
+  std::int64_t splits = 1;
+  if (tiles < kSplitKBelowTiles && k >= 2 * kSplitKMinChunk)
+    splits = std::min<std::int64_t>(kSplitKMax, k / kSplitKMinChunk);
+  const std::int64_t kc = (k + splits - 1) / splits;
+  splits = (k + kc - 1) / kc;
+
+  // Split-k partials: P_s = alpha op(A)[:, ks] op(B)[ks, :], summed in order s = 0, 1, ...
+  std::vector<float> partial;
+  if (splits > 1) partial.resize(static_cast<std::size_t>(splits * m * n));
+
+  const std::int64_t tasks = tiles * splits;
+#pragma omp parallel for schedule(static) if (tasks > 1 && flops >= kParallelMinFlops)
+  for (std::int64_t task = 0; task < tasks; ++task) {
+    const std::int64_t t = task / splits, sp = task % splits;
+    const std::int64_t i0 = (t / tiles_n) * kTileM, j0 = (t % tiles_n) * kTileN;
+    const std::int64_t mi = std::min(kTileM, m - i0), nj = std::min(kTileN, n - j0);
+    const std::int64_t k0 = sp * kc, kk = std::min(kc, k - k0);
+    detail::GemmArgs s = g;
+    // Rows i0.. and columns k0.. of op(A) (transposed: columns / rows of A).
+    if (trans_a) {
+      s.a += k0 * g.lda + i0;
+      s.a_rows = kk;
+      s.a_cols = mi;
+    } else {
+      s.a += i0 * g.lda + k0;
+      s.a_rows = mi;
+      s.a_cols = kk;
+    }
+    // Rows k0.. and columns j0.. of op(B).
+    if (trans_b) {
+      s.b += j0 * g.ldb + k0;
+      s.b_rows = nj;
+      s.b_cols = kk;
+    } else {
+      s.b += k0 * g.ldb + j0;
+      s.b_rows = kk;
+      s.b_cols = nj;
+    }
+    if (splits == 1) {
+      s.c += i0 * g.ldc + j0;
+    } else {
+      s.c = partial.data() + sp * m * n + i0 * n + j0;
+      s.ldc = n;
+      s.beta = 0.0f;
+    }
+    s.m = mi;
+    s.n = nj;
+    fn(s);
+  }
+  if (splits == 1) return;
+  const float* P = partial.data();
+  float* Cp = C.data();
+  const std::int64_t ldc = C.ld();
+#pragma omp parallel for schedule(static) if (flops >= kParallelMinFlops)
+  for (std::int64_t i = 0; i < m; ++i) {
+    float* c = Cp + i * ldc;
+    const float* p0 = P + i * n;
+    if (beta == 0.0f) {
+#pragma omp simd
+      for (std::int64_t j = 0; j < n; ++j) c[j] = p0[j];
+    } else {
+#pragma omp simd
+      for (std::int64_t j = 0; j < n; ++j) c[j] = beta * c[j] + p0[j];
+    }
+    for (std::int64_t sp = 1; sp < splits; ++sp) {
+      const float* ps = P + sp * m * n + i * n;
+#pragma omp simd
+      for (std::int64_t j = 0; j < n; ++j) c[j] += ps[j];
+    }
+  }
+}
+
+}  // namespace gatcore::cpu
