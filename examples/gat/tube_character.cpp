@@ -32,7 +32,8 @@ TubeCharacter make_tube(int rings, int segments, float radius) {
     const float w = t * t * (3.f - 2.f * t);
     for (int s = 0; s < segments; ++s) {
       const float a = 2.f * kPi * static_cast<float>(s) / static_cast<float>(segments);
-      c.rest.push_back({radius * std::cos(a), y, radius * std::sin(a)});
+      // Elliptic cross-section: a twist of the forearm is visible in the geometry.
+      c.rest.push_back({radius * std::cos(a), y, 0.6f * radius * std::sin(a)});
       c.elbow_weight.push_back(w);
     }
   }
