@@ -18,9 +18,11 @@
 // built without -march flags.
 // GCC 12 reports its own _mm512_undefined_* placeholders inside the AVX-512
 // intrinsics as "may be used uninitialized" (GCC PR 105593); silence that for
-// the intrinsic headers only.
+// the intrinsic headers only (include this header before anything else that
+// pulls in <immintrin.h>).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #include <immintrin.h>
 #pragma GCC diagnostic pop
 #include <omp.h>
