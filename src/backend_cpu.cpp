@@ -11,6 +11,7 @@
 #include "kernels/gat_fused.hpp"
 #include "kernels/gemm.hpp"
 #include "kernels/loss.hpp"
+#include "kernels/optimizer.hpp"
 #include "kernels/pooling.hpp"
 #include "kernels/row_softmax.hpp"
 
@@ -114,6 +115,11 @@ class CpuBackend final : public Backend {
     cpu::kl_div_backward(pred, target, eps, d_out.at(0, 0), d_pred);
   }
 
+  void adam_update(const Tensor& param, const Tensor& grad, const Tensor& m, const Tensor& v, float lr, float beta1,
+                   float beta2, float eps, float weight_decay, long step) override {
+    cpu::adam_update(param, grad, m, v, lr, beta1, beta2, eps, weight_decay, step);
+  }
+
   void attention_projection_forward(const Tensor& z, const Tensor& a_l, const Tensor& a_r, const Tensor& el,
                                     const Tensor& er) override {
     cpu::attention_projection_forward(z, a_l, a_r, el, er);
@@ -203,6 +209,11 @@ Backend& backend(Device d) {
 void register_backend(Backend* b) {
   GATCORE_CHECK(b != nullptr, "register_backend: null backend");
   g_backends[static_cast<std::size_t>(b->device())] = b;
+}
+
+void unregister_backend(Device d) {
+  GATCORE_CHECK(d != Device::cpu, "unregister_backend: the CPU backend is always present");
+  g_backends[static_cast<std::size_t>(d)] = nullptr;
 }
 
 bool has_backend(Device d) { return g_backends[static_cast<std::size_t>(d)] != nullptr; }

@@ -105,7 +105,10 @@ TEST_CASE("gradcheck graph attention ops", "[autograd]") {
                        return aggregate(g, edge_softmax_additive(g, el, er, 0.2f), v[0]);
                      },
                      {z, al, ar});
-    Tensor el = random_tensor(n, H, rng), er = random_tensor(n, H, rng);
+    // Logit sums el_i + er_j on both sides of LeakyReLU's kink but never near it.
+    Tensor el = random_tensor(n, H, rng, 0.3f, 0.6f), er = random_tensor(n, H, rng, 0.0f, 0.1f);
+    for (std::int64_t i = 0; i < n; i += 2)
+      for (int k = 0; k < H; ++k) er.at(i, k) -= 1.5f;
     gradcheck::check("edge_softmax_additive",
                      [g](const std::vector<Var>& v) { return edge_softmax_additive(g, v[0], v[1], 0.2f); },
                      {el, er});

@@ -68,6 +68,10 @@ class Backend {
   virtual void kl_div_backward(const Tensor& pred, const Tensor& target, float eps, const Tensor& d_out,
                                const Tensor& d_pred) = 0;
 
+  // Optimiser (kernels/optimizer.hpp).
+  virtual void adam_update(const Tensor& param, const Tensor& grad, const Tensor& m, const Tensor& v, float lr,
+                           float beta1, float beta2, float eps, float weight_decay, long step) = 0;
+
   // Graph attention (see kernels/attention_projection.hpp, edge_softmax.hpp,
   // aggregation.hpp, gat_fused.hpp).
   virtual void attention_projection_forward(const Tensor& z, const Tensor& a_l, const Tensor& a_r,
@@ -115,6 +119,8 @@ Backend& backend(Device d);
 // Registers (or replaces) the backend of its device; the pointer must outlive its use.
 void register_backend(Backend* b);
 bool has_backend(Device d);
+// Removes the backend of a device (not the CPU one); tests use it.
+void unregister_backend(Device d);
 
 // Moves / copies a tensor to another device (a no-op view when already there).
 Tensor to(const Tensor& t, Device d);

@@ -30,7 +30,11 @@ Var make_output(const char* op, Backend& be, std::int64_t rows, std::int64_t col
     GATCORE_CHECK(into.rows() == rows && into.cols() == cols, op, ": `into` has shape ", into.value().shape_str(),
                   ", the result is [", rows, ", ", cols, "]");
     GATCORE_CHECK(into.device() == be.device(), op, ": `into` lives on ", device_name(into.device()));
-    if (grad) into.set_requires_grad(true);
+    if (grad) {
+      into.set_requires_grad(true);
+      // The buffer a slot belongs to carries the gradient of all its slots.
+      if (into.impl()->base) into.impl()->base->requires_grad = true;
+    }
     return into;
   }
   return Var(be.empty(rows, cols), grad);
