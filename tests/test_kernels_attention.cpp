@@ -574,6 +574,42 @@ TEST_CASE("large logits stay finite and match the reference", "[attention][stabi
   }
 }
 
+TEST_CASE("fused online softmax rescales exactly when logits spread widely", "[attention][fused][rescale]") {
+  // Logits spanning tens of units move the running max by more than the lazy
+  // rescale margin, so the rescale branch runs often; results must still match
+  // the reference tightly (float rounding of logits ~30 costs ~1e-6 relative).
+  for (int gi : {0, 2}) {  // random, hub
+    const GraphCase& gc = graph_cases()[gi];
+    const CsrGraph& g = gc.g;
+    const std::int64_t n = g.num_nodes, E = g.num_edges();
+    for (Shape s : {Shape{8, 8}, Shape{3, 5}}) {
+      const int H = s.H, F = s.F;
+      std::mt19937 rng(42 + gi);
+      Tensor z = random_tensor(n, H * F, rng, -2.5, 2.5);
+      Tensor el = random_tensor(n, H, rng, -20, 20), er = random_tensor(n, H, rng, -20, 20);
+      const ref::DMat alpha_ref = ref::softmax(g, ref::logits_additive(g, ref::to_d(el), ref::to_d(er), 0.5));
+      const ref::DMat out_ref = ref::aggregate(g, alpha_ref, ref::to_d(z));
+      const ref::DMat alphad_ref = ref::softmax(g, ref::logits_dot(g, ref::to_d(z), H, 1.0));
+      const ref::DMat outd_ref = ref::aggregate(g, alphad_ref, ref::to_d(z));
+      sweep(
+          context(gc.name, s, false) + " wide logits",
+          [&] {
+            Tensor out = Tensor::zeros(n, H * F), a = Tensor::zeros(E, H);
+            Tensor outd = Tensor::zeros(n, H * F), ad = Tensor::zeros(E, H);
+            cpu::gat_fused_additive_forward(g, z, el, er, 0.5f, out, a);
+            cpu::gat_fused_dot_forward(g, z, H, 1.0f, outd, ad);
+            return std::vector<Tensor>{out, a, outd, ad};
+          },
+          [&](const std::vector<Tensor>& o) {
+            CHECK_CLOSE(o[0], out_ref, 3e-5);
+            CHECK_CLOSE(o[1], alpha_ref, 3e-5);
+            CHECK_CLOSE(o[2], outd_ref, 3e-5);
+            CHECK_CLOSE(o[3], alphad_ref, 3e-5);
+          });
+    }
+  }
+}
+
 TEST_CASE("rows without edges give zero output and no NaN", "[attention][isolated]") {
   // Nodes 2 and 3 have no in-edges; node 3 has no edges at all.
   const CsrGraph g = testutil::graph_from_adjacency({{0, 1}, {0, 2}, {}, {}});
