@@ -1,0 +1,19 @@
+#pragma once
+// The `gat` tool's subcommands: one file per command (cmd_<name>.cpp), each
+// a function taking the arguments after the command name. Adding a command is
+// one declaration here and one row in kCommands (main.cpp).
+namespace gat {
+
+// argv[0] is the command name; returns the process exit code. Commands throw
+// gatcore::Error for bad input; main prints it and exits 1.
+using CommandFn = int (*)(int argc, char** argv);
+
+struct Command {
+  const char* name;
+  CommandFn run;
+  const char* summary;
+};
+
+int cmd_demo(int argc, char** argv);
+
+}  // namespace gat
