@@ -133,7 +133,7 @@ int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
                "usage: gat demo [--epochs N] [--batch B] [--seed S] [--lr LR]\n"
                "  Trains a small DenseGATs-style network on the embedded two-bone tube to\n"
-               "  correct linear blend skinning, then reports held-out vertex errors.\n",
+               "  correct linear blend skinning, then reports held-out vertex errors.\n");
   return rc;
 }
 
