@@ -26,6 +26,9 @@ class Backend {
   virtual Tensor zeros(std::int64_t rows, std::int64_t cols, DType dt = DType::f32) = 0;
   virtual void fill(const Tensor& y, float value) = 0;
   virtual void copy(const Tensor& src, const Tensor& dst) = 0;  // same shape, strided
+  // Transfers: a device copy of a CPU tensor, and a CPU copy of a device one.
+  virtual Tensor from_host(const Tensor& host) = 0;
+  virtual Tensor to_host(const Tensor& t) = 0;
 
   // Dense algebra.
   virtual void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
@@ -64,6 +67,10 @@ class Backend {
   virtual void kl_div_forward(const Tensor& pred, const Tensor& target, float eps, const Tensor& out) = 0;
   virtual void kl_div_backward(const Tensor& pred, const Tensor& target, float eps, const Tensor& d_out,
                                const Tensor& d_pred) = 0;
+
+  // Optimiser (kernels/optimizer.hpp).
+  virtual void adam_update(const Tensor& param, const Tensor& grad, const Tensor& m, const Tensor& v, float lr,
+                           float beta1, float beta2, float eps, float weight_decay, long step) = 0;
 
   // Graph attention (see kernels/attention_projection.hpp, edge_softmax.hpp,
   // aggregation.hpp, gat_fused.hpp).
@@ -112,6 +119,8 @@ Backend& backend(Device d);
 // Registers (or replaces) the backend of its device; the pointer must outlive its use.
 void register_backend(Backend* b);
 bool has_backend(Device d);
+// Removes the backend of a device (not the CPU one); tests use it.
+void unregister_backend(Device d);
 
 // Moves / copies a tensor to another device (a no-op view when already there).
 Tensor to(const Tensor& t, Device d);

@@ -21,6 +21,10 @@ namespace gatcore {
 using GraphPtr = std::shared_ptr<const CsrGraph>;
 inline GraphPtr share(CsrGraph g) { return std::make_shared<const CsrGraph>(std::move(g)); }
 
+// Validates model input: one row per graph node and every entry finite.
+// Throws InvalidArgument naming `what`, the row and the column of a NaN/Inf.
+void check_node_features(const CsrGraph& g, const Tensor& x, const char* what = "node features");
+
 // ---- dense ------------------------------------------------------------------
 Var matmul(const Var& a, const Var& b, const Var& into = {});                     // a [n,k] · b [k,m]
 Var linear(const Var& x, const Var& W, const Var& b, const Var& into = {});       // x·W + b, W [in,out], b [1,out] or undefined

@@ -1,0 +1,42 @@
+#pragma once
+// Shared plumbing of the differentiable ops (not installed).
+#include <initializer_list>
+
+#include "gatcore/autograd.hpp"
+#include "gatcore/backend.hpp"
+#include "gatcore/ops.hpp"
+
+namespace gatcore::ops_detail {
+
+using ImplPtr = std::shared_ptr<VarImpl>;
+
+// The backend all (defined) inputs live on; throws naming the op if they differ.
+Backend& backend_of(const char* op, std::initializer_list<const Var*> inputs);
+
+// The output Var: `into` (shape-checked, marked requires_grad as needed) or a
+// fresh [rows, cols] tensor on the backend.
+Var make_output(const char* op, Backend& be, std::int64_t rows, std::int64_t cols, const Var& into, bool grad);
+
+void check_var(const char* op, const char* arg, const Var& v);
+void check_same_shape(const char* op, const char* a_name, const Tensor& a, const char* b_name, const Tensor& b);
+
+// Gradient buffer of an input if it wants one, else undefined (kernels skip it).
+inline Tensor grad_for(const ImplPtr& p) { return p && p->requires_grad ? p->grad_or_zeros() : Tensor{}; }
+inline ImplPtr impl_if(const Var& v) { return v.defined() ? v.impl() : nullptr; }
+
+// Adds the result of a kernel that *overwrites* its gradient output: straight
+// into a fresh gradient, or through a temporary when one already exists.
+template <class F>
+void overwrite_grad_into(Backend& be, const ImplPtr& p, F&& kernel) {
+  if (!p || !p->requires_grad) return;
+  Tensor g = p->grad_if_any();
+  if (!g.defined()) {
+    kernel(p->grad_or_zeros());
+  } else {
+    Tensor tmp = be.empty(g.rows(), g.cols());
+    kernel(tmp);
+    be.axpy(1.0f, tmp, g);
+  }
+}
+
+}  // namespace gatcore::ops_detail
