@@ -20,6 +20,7 @@
 // from the header lines, so it is set around the include.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #include <immintrin.h>
 #pragma GCC diagnostic pop
 #define GATCORE_X86_SIMD 1

@@ -19,7 +19,7 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <vector>
+#include <memory>
 
 #include "kernels/gemm_impl.hpp"
 #include "kernels/nn_detail.hpp"
@@ -52,10 +52,11 @@ namespace {
 #endif
 constexpr std::int64_t kTileM = GATCORE_GEMM_TILE_M;
 constexpr std::int64_t kTileN = GATCORE_GEMM_TILE_N;
-// Split k into at most kSplitKMax chunks of >= kSplitKMinChunk when C has
-// fewer than kSplitKBelowTiles tiles.
-constexpr std::int64_t kSplitKBelowTiles = 4;
-constexpr std::int64_t kSplitKMinChunk = 1024;
+// When C is a single tile (e.g. a weight gradient X^T dY, k = nodes), k is
+// split into min(8, k / 1000) chunks whose partial products (8 * 512 * 512
+// floats = 8 MiB at most) are summed in chunk order.
+constexpr std::int64_t kSplitKBelowTiles = 2;
+constexpr std::int64_t kSplitKMinChunk = 1000;
 constexpr std::int64_t kSplitKMax = 8;
 // Below this many flops one thread does all tiles (same result, less overhead).
 constexpr double kParallelMinFlops = 4.0e6;
@@ -116,8 +117,8 @@ void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Te
   splits = (k + kc - 1) / kc;
 
   // Split-k partials: P_s = alpha op(A)[:, ks] op(B)[ks, :], summed in order s = 0, 1, ...
-  std::vector<float> partial;
-  if (splits > 1) partial.resize(static_cast<std::size_t>(splits * m * n));
+  // (uninitialised: every element is written with beta = 0)
+  std::unique_ptr<float[]> partial(splits > 1 ? new float[static_cast<std::size_t>(splits * m * n)] : nullptr);
 
   const std::int64_t tasks = tiles * splits;
 #pragma omp parallel for schedule(static) if (tasks > 1 && flops >= kParallelMinFlops)
@@ -150,7 +151,7 @@ void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Te
     if (splits == 1) {
       s.c += i0 * g.ldc + j0;
     } else {
-      s.c = partial.data() + sp * m * n + i0 * n + j0;
+      s.c = partial.get() + sp * m * n + i0 * n + j0;
       s.ldc = n;
       s.beta = 0.0f;
     }
@@ -159,7 +160,7 @@ void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Te
     fn(s);
   }
   if (splits == 1) return;
-  const float* P = partial.data();
+  const float* P = partial.get();
   float* Cp = C.data();
   const std::int64_t ldc = C.ld();
 #pragma omp parallel for schedule(static) if (flops >= kParallelMinFlops)

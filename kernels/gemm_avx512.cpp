@@ -8,6 +8,7 @@
 // GCC 12 reports the _mm512_undefined_* idiom in its own AVX-512 headers
 // (used by Eigen) as -Wmaybe-uninitialized; it is a false positive.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC target("avx512f,avx512bw,avx512vl,avx512dq,avx512cd,avx2,fma,f16c,popcnt,prefer-vector-width=512")
 #ifndef __SSE3__
 #define __SSE3__ 1
