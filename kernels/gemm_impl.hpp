@@ -21,7 +21,8 @@ void gemm_eigen_baseline(const GemmArgs& g);
 // Defined only on x86-64 builds (gemm_avx2.cpp / gemm_avx512.cpp).
 void gemm_eigen_avx2(const GemmArgs& g);
 void gemm_eigen_avx512(const GemmArgs& g);
-// The SIMD instruction sets each Eigen build uses (Eigen::SimdInstructionSetsInUse()).
+// The SIMD instruction set each Eigen build vectorises with: "AVX512+FMA",
+// "AVX2+FMA", "AVX", "SSE2" or "none".
 const char* gemm_eigen_isa_baseline();
 const char* gemm_eigen_isa_avx2();
 const char* gemm_eigen_isa_avx512();

@@ -12,6 +12,7 @@
 #include "kernels/dense_concat.hpp"
 #include "kernels/elementwise.hpp"
 #include "kernels/gemm.hpp"
+#include "kernels/gemm_impl.hpp"
 #include "kernels/loss.hpp"
 #include "kernels/row_softmax.hpp"
 #include "reference/nn_reference.hpp"
@@ -68,7 +69,13 @@ TEST_CASE("gemm: transpose combinations, alpha/beta, strided views, odd sizes", 
 }
 
 TEST_CASE("gemm: the Eigen build of each SIMD level is what it says", "[gemm]") {
-  // Exercised indirectly above; here just a larger product per level.
+  INFO("baseline build: " << cpu::detail::gemm_eigen_isa_baseline());  // SSE2 (more with GATCORE_NATIVE)
+  CHECK(std::string(cpu::detail::gemm_eigen_isa_baseline()) != "none");
+#if defined(__x86_64__) && defined(__GNUC__)
+  CHECK(std::string(cpu::detail::gemm_eigen_isa_avx2()) == "AVX2+FMA");
+  CHECK(std::string(cpu::detail::gemm_eigen_isa_avx512()) == "AVX512+FMA");
+#endif
+  // and a larger product per level
   Rng rng(12);
   Tensor A = random(rng, 300, 200, false), B = random(rng, 200, 150, true);
   Mat bound;
