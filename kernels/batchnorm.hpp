@@ -1,6 +1,7 @@
 #pragma once
 // BatchNorm1d over the rows (nodes) of x: [n, C]. Statistics in double
-// precision for stability on 10^5 rows.
+// precision for stability on 10^5 rows. gamma / beta may be undefined (no
+// affine part); training needs at least 2 rows.
 #include "gatcore/tensor.hpp"
 
 namespace gatcore::cpu {

@@ -9,7 +9,8 @@ using gatcore::Activation;  // include/gatcore/activation.hpp
 
 // y = f(x); `slope` is the LeakyReLU negative slope.
 void activation_forward(Activation f, const Tensor& x, const Tensor& y, float slope = 0.01f);
-// d_x += f'(x) ⊙ d_y  (uses x and/or y, whichever the derivative needs)
+// d_x += f'(x) ⊙ d_y. tanh uses y; tanhshrink needs x; the ReLU family uses
+// x. tanh is a vectorised approximation (max error ~3e-7).
 void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x,
                          float slope = 0.01f);
 

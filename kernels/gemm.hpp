@@ -1,6 +1,11 @@
 #pragma once
 // Dense GEMM on gatcore tensors (strided views allowed) through Eigen::Map:
 //   C = alpha * op(A) * op(B) + beta * C,  op(X) = X or X^T.
+// Deterministic across thread counts: gatcore threads it itself over fixed
+// 512×512 tiles of C (and fixed k-chunks when C is one tile), each a serial
+// Eigen call, instead of Eigen's own thread-count-dependent blocking.
+// C must not overlap A or B (a DenseNet prefix and its next slot may share a
+// buffer); beta = 0 ignores C's previous contents (NaN included).
 #include "gatcore/tensor.hpp"
 
 namespace gatcore::cpu {

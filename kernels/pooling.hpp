@@ -4,7 +4,9 @@
 //   given by node offsets seg_ptr), with the argmax saved for backward, and
 //   its broadcast back to every node of the segment;
 // - neighbour mean: out[i] = mean of x[j] over the neighbour set of i given as
-//   a second CSR graph (the k geodesically nearest vertices).
+//   a second CSR graph (the k geodesically nearest vertices); that graph is
+//   square over the same nodes. Kernels check array sizes only; index ranges
+//   are CsrGraph::validate()'s job (the graph builders guarantee them).
 #include <cstdint>
 #include <span>
 
