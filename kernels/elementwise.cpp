@@ -18,16 +18,6 @@ namespace {
 using detail::check_arg;
 using detail::for_each_row;
 
-const char* act_name(Activation f) {
-  switch (f) {
-    case Activation::identity: return "identity";
-    case Activation::tanh: return "tanh";
-    case Activation::tanhshrink: return "tanhshrink";
-    case Activation::leaky_relu: return "leaky_relu";
-    case Activation::relu: return "relu";
-  }
-  return "?";
-}
 
 // ---- tanh row kernels -----------------------------------------------------------
 // Mode: what a row kernel computes from t = tanh(x[i]).
@@ -218,7 +208,7 @@ void activation_backward(Activation f, const Tensor& x, const Tensor& y, const T
   // What the derivative is computed from.
   const bool needs_input = f != Activation::identity;
   GATCORE_CHECK(!needs_input || x.defined() || (y.defined() && f != Activation::tanhshrink),
-                "activation_backward(", act_name(f), "): x: tensor is undefined",
+                "activation_backward(", activation_name(f), "): x: tensor is undefined",
                 f == Activation::tanhshrink ? " (tanhshrink needs x)" : " (and y is undefined too)");
   if (!d_x.defined()) return;
   check_arg(d_x, rows, n, "activation_backward: d_x");

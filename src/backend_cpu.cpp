@@ -17,16 +17,6 @@
 
 namespace gatcore {
 
-const char* activation_name(Activation a) {
-  switch (a) {
-    case Activation::identity: return "identity";
-    case Activation::tanh: return "tanh";
-    case Activation::tanhshrink: return "tanhshrink";
-    case Activation::leaky_relu: return "leaky_relu";
-    case Activation::relu: return "relu";
-  }
-  return "?";
-}
 
 namespace {
 

@@ -1,10 +1,23 @@
 #include "gatcore/tensor.hpp"
 
+#include "gatcore/activation.hpp"
+
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 
 namespace gatcore {
+
+const char* activation_name(Activation a) {
+  switch (a) {
+    case Activation::identity: return "identity";
+    case Activation::tanh: return "tanh";
+    case Activation::tanhshrink: return "tanhshrink";
+    case Activation::leaky_relu: return "leaky_relu";
+    case Activation::relu: return "relu";
+  }
+  return "?";
+}
 
 const char* device_name(Device d) {
   switch (d) {

@@ -10,9 +10,21 @@ void check_graph(const char* op, const GraphPtr& g, std::int64_t rows, const cha
   GATCORE_CHECK(rows == g->num_nodes, op, ": ", what, " has ", rows, " rows but the graph has ", g->num_nodes,
                 " nodes");
 }
-int heads_of(const char* op, const Var& a) {
-  GATCORE_CHECK(a.rows() >= 1, op, ": attention vector has no heads");
-  return static_cast<int>(a.rows());
+// a_l, a_r: [H, F] and z: [n, H*F]; returns H.
+int check_attention_vectors(const char* op, const Var& z, const Var& a_l, const Var& a_r) {
+  check_var(op, "z", z);
+  check_var(op, "a_l", a_l);
+  check_var(op, "a_r", a_r);
+  const std::int64_t H = a_l.rows();
+  GATCORE_CHECK(H >= 1 && a_r.rows() == H && a_r.cols() == a_l.cols() && z.cols() == H * a_l.cols(), op, ": z ",
+                z.value().shape_str(), ", a_l ", a_l.value().shape_str(), ", a_r ", a_r.value().shape_str(),
+                " do not fit (need a_l, a_r [H, F] and z [n, H*F])");
+  return static_cast<int>(H);
+}
+void check_heads(const char* op, const Var& x, int heads) {
+  check_var(op, "input", x);
+  GATCORE_CHECK(heads >= 1 && x.cols() % heads == 0, op, ": ", x.cols(), " columns do not split into ", heads,
+                " heads");
 }
 }  // namespace
 
@@ -27,10 +39,7 @@ std::pair<Var, Var> attention_projection(const Var& z, const Var& a_l, const Var
   check_var(op, "z", z);
   check_var(op, "a_l", a_l);
   check_var(op, "a_r", a_r);
-  const int H = heads_of(op, a_l);
-  GATCORE_CHECK(a_r.rows() == H && a_r.cols() == a_l.cols() && z.cols() == H * a_l.cols(), op, ": z ",
-                z.value().shape_str(), ", a_l ", a_l.value().shape_str(), ", a_r ", a_r.value().shape_str(),
-                " do not fit (need a_l, a_r [H, F] and z [n, H*F])");
+  const int H = check_attention_vectors(op, z, a_l, a_r);
   Backend& be = backend_of(op, {&z, &a_l, &a_r});
   const bool grad = needs_grad({&z, &a_l, &a_r});
   Var el(be.empty(z.rows(), H), grad), er(be.empty(z.rows(), H), grad);
@@ -75,8 +84,7 @@ Var edge_softmax_dot(const GraphPtr& g, const Var& h, int heads, float scale) {
   static const char* op = "edge_softmax_dot";
   check_var(op, "h", h);
   check_graph(op, g, h.rows(), "h");
-  GATCORE_CHECK(heads >= 1 && h.cols() % heads == 0, op, ": ", h.cols(), " columns do not split into ", heads,
-                " heads");
+  check_heads(op, h, heads);
   Backend& be = backend_of(op, {&h});
   const bool grad = needs_grad({&h});
   Var alpha(be.empty(g->num_edges(), heads), grad);
@@ -122,10 +130,7 @@ Var gat_additive(const GraphPtr& g, const Var& z, const Var& a_l, const Var& a_r
   check_var(op, "a_l", a_l);
   check_var(op, "a_r", a_r);
   check_graph(op, g, z.rows(), "z");
-  const int H = heads_of(op, a_l);
-  GATCORE_CHECK(a_r.rows() == H && a_r.cols() == a_l.cols() && z.cols() == H * a_l.cols(), op, ": z ",
-                z.value().shape_str(), ", a_l ", a_l.value().shape_str(), ", a_r ", a_r.value().shape_str(),
-                " do not fit (need a_l, a_r [H, F] and z [n, H*F])");
+  const int H = check_attention_vectors(op, z, a_l, a_r);
   Backend& be = backend_of(op, {&z, &a_l, &a_r});
   const bool grad = needs_grad({&z, &a_l, &a_r});
   Tensor el = be.empty(z.rows(), H), er = be.empty(z.rows(), H);
@@ -153,8 +158,7 @@ Var gat_dot(const GraphPtr& g, const Var& z, int heads, float scale, const Var& 
   static const char* op = "gat_dot";
   check_var(op, "z", z);
   check_graph(op, g, z.rows(), "z");
-  GATCORE_CHECK(heads >= 1 && z.cols() % heads == 0, op, ": ", z.cols(), " columns do not split into ", heads,
-                " heads");
+  check_heads(op, z, heads);
   Backend& be = backend_of(op, {&z});
   const bool grad = needs_grad({&z});
   Var y = make_output(op, be, z.rows(), z.cols(), into, grad);
