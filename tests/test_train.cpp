@@ -4,6 +4,8 @@
 
 #include <set>
 
+#include <omp.h>
+
 #include "gatcore/models/train.hpp"
 #include "model_fixtures.hpp"
 
@@ -115,5 +117,11 @@ TEST_CASE("training is deterministic given a seed") {
     const auto a = run(7), b = run(7), d = run(8);
     CHECK(a == b);
     CHECK(a != d);
+    // Every kernel reduces in a fixed order independent of the thread count.
+    const int nt = omp_get_max_threads();
+    omp_set_num_threads(nt == 1 ? 2 : 1);
+    const auto e = run(7);
+    omp_set_num_threads(nt);
+    CHECK(a == e);
   }
 }

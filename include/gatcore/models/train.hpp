@@ -1,12 +1,13 @@
 #pragma once
 // Training: vertex sampling, batching, Adam with the papers' schedules.
 //
-// Determinism: given the same seed, samples, options and OMP thread count,
-// training is bit-reproducible (seeded mt19937_64 for initialisation,
-// sampling, shuffling and dropout; every kernel is deterministic for a fixed
-// thread count: gather-based backward passes, fixed GEMM tiling). Across
-// different thread counts, reductions may be grouped differently, so results
-// agree only to float rounding.
+// Determinism: given the same seed, samples and options, training is
+// bit-reproducible on one machine and build (seeded mt19937_64 with our own
+// distributions for initialisation, sampling, shuffling and dropout; every
+// kernel reduces in a fixed order: gather-based backward passes, fixed GEMM
+// tiling). That holds across OpenMP thread counts too (tested: 1 vs 2). It
+// does not hold across SIMD levels (GATCORE_SIMD, different CPUs: FMA and
+// vectorised exp/tanh round differently) or compilers.
 #include <functional>
 #include <map>
 #include <memory>
