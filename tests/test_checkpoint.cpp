@@ -184,5 +184,8 @@ TEST_CASE("checkpoint writes are atomic: no temp file left, an existing file is 
   CHECK_FALSE(std::ifstream(path + ".tmp").good());
   CHECK_NOTHROW(load_checkpoint(path));
   CHECK_THROWS_WITH(save_checkpoint("/nonexistent_dir/x.gcm", *m, Normaliser{}), Catch::Contains("cannot open"));
+  auto f = make_model(small_config("fc"), 1);
+  f->fold_batch_norm();
+  CHECK_THROWS_WITH(save_checkpoint(path, *f, Normaliser{}), Catch::Contains("folded"));
   std::remove(path.c_str());
 }

@@ -36,7 +36,8 @@ int usage(int rc) {
                "                 neuroskinning, neuroskinning-nopool, fc, pointnet; paper settings\n"
                "  --out FILE     checkpoint path (default model.gcm)\n"
                "  --epochs N     epochs to train, in total when resuming (default 10)\n"
-               "  --resume FILE  continue from a checkpoint written by gat train (model from the file)\n"
+               "  --resume FILE  continue from a checkpoint written by gat train (model, data, seed\n"
+               "                 and batch size from the file)\n"
                "  --seed S       initialisation, sampling and data seed (default 0)\n"
                "  --threads T    OpenMP threads (default: all cores)\n"
                "  --batch B      characters per batch (default: paper, 8 or 12)\n"
@@ -112,6 +113,14 @@ int gat::cmd_train(int argc, char** argv) {
     loaded = load_checkpoint(resume);
     model = std::move(loaded.model);
     norm = loaded.norm;
+    // The run's data and batching come from the checkpoint, so the resumed
+    // run continues exactly where the interrupted one stopped.
+    const auto& md = loaded.file.metadata;
+    if (md.count("seed") && md.count("samples") && md.count("batch")) {
+      seed = std::stol(md.at("seed"));
+      samples = std::stol(md.at("samples"));
+      batch = std::stol(md.at("batch"));
+    }
   } else {
     const bool weights = ModelConfig::defaults(model_name, 1).task == Task::weights;
     model = make_model(ModelConfig::defaults(model_name, demo::kTubeFeatures, weights ? demo::kTubeBones : 3),
@@ -155,7 +164,9 @@ int gat::cmd_train(int argc, char** argv) {
       std::fflush(stderr);
     };
     const EpochStats st = trainer.run_epoch(train, val, progress);
-    save_checkpoint(out, *model, norm, &trainer);
+    save_checkpoint(out, *model, norm, &trainer,
+                    {{"data", "embedded tube character"}, {"skeleton", "upper_arm,forearm"}, {"seed", std::to_string(seed)},
+                     {"samples", std::to_string(samples)}, {"batch", std::to_string(opt.batch_size)}});
     if (tty) std::fprintf(stderr, "\r\033[K");
     std::printf("epoch %d/%ld  train loss %.6f  val loss %.6f  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
                 epochs, st.train_loss, st.val_loss, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,

@@ -296,6 +296,8 @@ std::string rng_str(nn::Rng& r) {
 
 void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm, const Trainer* trainer,
                      const std::map<std::string, std::string>& extra) {
+  if (model.folded())
+    fail(path, "the model's BatchNorms were folded for inference; save the unfolded model (load it again)");
   CheckpointFile f;
   f.metadata = extra;
   f.metadata["config"] = model.config().to_text();

@@ -53,7 +53,7 @@ class DenseGats final : public Model {
     return output(head_.forward(y, training, rng_), b);
   }
 
-  void fold_batch_norm() override {
+  void fold() override {
     for (auto& l : transform_) l.fold();
     head_.fold();
   }

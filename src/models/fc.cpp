@@ -30,7 +30,7 @@ class Fc final : public Model {
     return output(out_.forward(y), b);
   }
 
-  void fold_batch_norm() override {
+  void fold() override {
     for (auto& l : layers_) l.fold();
   }
 

@@ -56,7 +56,7 @@ class NeuroSkinning final : public Model {
     return output(classifier_.forward(concat({y, glob}), training, rng_), b);
   }
 
-  void fold_batch_norm() override {
+  void fold() override {
     stage1_.fold();
     global_.fold();
     classifier_.fold();

@@ -28,7 +28,7 @@ class PointNet final : public Model {
     return output(head_.forward(concat({l, g}), training, rng_), b);
   }
 
-  void fold_batch_norm() override {
+  void fold() override {
     local_.fold();
     global_.fold();
     head_.fold();

@@ -44,7 +44,12 @@ class Model {
   // Folds every BatchNorm that directly follows a Linear into it (inference
   // only; eval outputs are unchanged). BatchNorms after a nonlinearity (the
   // GAT blocks') stay.
-  virtual void fold_batch_norm() {}
+  // A folded model is for inference only: save_checkpoint refuses it.
+  void fold_batch_norm() {
+    if (!folded_) fold();
+    folded_ = true;
+  }
+  bool folded() const { return folded_; }
   // Neighbour graph sizes forward() needs in Batch::neighbours.
   virtual std::vector<int> pool_sizes() const { return {}; }
   // Dropout randomness (seeded with the model).
@@ -53,8 +58,10 @@ class Model {
  protected:
   // Softmax of logits with the batch's bone mask (weights task); identity otherwise.
   Var output(const Var& logits, const Batch& b) const;
+  virtual void fold() {}
   ModelConfig cfg_;
   nn::Registry reg_;
+  bool folded_ = false;
   nn::Rng rng_{0};
 };
 
