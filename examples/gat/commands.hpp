@@ -15,5 +15,6 @@ struct Command {
 };
 
 int cmd_demo(int argc, char** argv);
+int cmd_train(int argc, char** argv), cmd_eval(int argc, char** argv);
 
 }  // namespace gat

@@ -9,6 +9,7 @@ namespace {
 
 constexpr gat::Command kCommands[] = {
     {"demo", gat::cmd_demo, "train a small DenseGATs on the embedded tube character, compare with LBS"},
+    {"train", gat::cmd_train, "train a model by name (densegats, neuroskinning, ...)"}, {"eval", gat::cmd_eval, "evaluate a checkpoint"},
 };
 
 int usage(int rc) {

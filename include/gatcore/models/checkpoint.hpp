@@ -1,0 +1,65 @@
+#pragma once
+// Checkpoints ("model.gcm"): a safetensors file, so PyTorch users can read
+// the weights with `safetensors.torch.load_file`, with gatcore's metadata in
+// the header's "__metadata__" block.
+//
+// Layout (all integers little-endian):
+//   u64 N                      header length in bytes
+//   N bytes                    JSON header, space-padded to a multiple of 8:
+//     {"__metadata__": {"format": "gatcore-checkpoint", "format_version": "1",
+//                       "checksum": "<FNV-1a 64 of the data section, hex>",
+//                       "config": "<ModelConfig::to_text()>", ...},
+//      "<tensor name>": {"dtype": "F32", "shape": [rows, cols], "data_offsets": [begin, end]}, ...}
+//   data section               raw row-major float32 tensors at their offsets
+// Tensor names: the model's parameters and buffers (BatchNorm running stats)
+// under their registry names; "norm.mean", "norm.inv_std" (feature
+// normalisation); "optim.m.<param>", "optim.v.<param>" (Adam moments).
+// Metadata (strings): config, target_scale, epoch, lr, adam_steps, rng,
+// model_rng, plateau_best, plateau_has_best, plateau_bad_epochs, and any extra
+// entries of the caller (e.g. skeleton bone names).
+//
+// Writes go to "<path>.tmp" and are renamed over `path` (atomic on POSIX).
+// Reading checks the magic (format key), version, sizes, offsets, the
+// checksum, and every tensor's name and shape against the model; errors are
+// CheckpointError naming the file and the problem. A model is returned only
+// if everything loaded.
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gatcore/models/train.hpp"
+
+namespace gatcore::models {
+
+struct CheckpointError : Error {
+  using Error::Error;
+};
+
+// The raw file: metadata and named tensors (in file order).
+struct CheckpointFile {
+  std::map<std::string, std::string> metadata;
+  std::vector<std::pair<std::string, Tensor>> tensors;
+  const Tensor* find(const std::string& name) const;
+};
+
+void write_checkpoint_file(const std::string& path, const CheckpointFile& f);
+CheckpointFile read_checkpoint_file(const std::string& path);
+
+// Saves the model (parameters + buffers), the normaliser and, if `trainer`
+// is given, the state to resume training.
+void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm,
+                     const Trainer* trainer = nullptr, const std::map<std::string, std::string>& extra = {});
+
+struct LoadedModel {
+  std::unique_ptr<Model> model;
+  Normaliser norm;
+  CheckpointFile file;  // raw contents, for metadata and resume
+};
+LoadedModel load_checkpoint(const std::string& path);
+
+// Restores optimiser moments, epoch, lr, RNG and scheduler state saved with
+// the trainer (the trainer must wrap the model loaded from the same file).
+void restore_training_state(const CheckpointFile& f, Trainer& trainer, const std::string& path = "checkpoint");
+
+}  // namespace gatcore::models

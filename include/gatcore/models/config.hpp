@@ -1,0 +1,52 @@
+#pragma once
+// Model configuration: one struct for every model, defaults = the papers'
+// settings (../shared/SPEC.md). Serialised as "key = value" lines (lists
+// comma-separated) so a checkpoint's configuration is human-readable.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace gatcore::models {
+
+enum class Task { displacement, weights };  // MSE on [n,3] offsets / KL on [n,|B|] skin weights
+const char* task_name(Task t);
+
+struct ModelConfig {
+  std::string name = "densegats";
+  Task task = Task::displacement;
+  std::int64_t in_dim = 0;   // node feature width (required)
+  std::int64_t out_dim = 3;  // 3 for displacements, |B| (super skeleton) for weights
+  bool batch_norm = true;
+
+  // DenseGATs (and its ablations)
+  std::vector<std::int64_t> transform{32, 32};
+  int modules = 3, blocks = 6, heads = 8, head_dim = 8;
+  float beta = 0.125f;  // self-reinforced stream width / (K·F); 0 = densegats-noself
+  bool dense = true;    // false = densegats-nodense
+  std::vector<std::int64_t> head{512, 128};
+  // Ori.GAT
+  int gat_layers = 4;
+  // NeuroSkinning
+  std::vector<std::int64_t> stage1{128, 64};
+  std::vector<std::int64_t> gc_heads{4, 2, 2}, gc_dims{64, 64, 64}, gc_pool{16, 24, 64};
+  bool pool = true;  // false = neuroskinning-nopool
+  std::vector<std::int64_t> global_mlp{512, 1024};
+  std::vector<std::int64_t> classifier{1024, 512};
+  // FC baseline (NeuroSkinning Table 7)
+  std::vector<std::int64_t> fc{1024, 512, 512, 256};
+  float dropout = 0.6f;
+  float slope = 0.1f;  // LeakyReLU slope of the NeuroSkinning-family MLPs
+  // PointNet
+  std::vector<std::int64_t> point_local{64, 64}, point_global{64, 128, 1024}, point_head{512, 256, 128};
+  // Skin-weight post-processing: keep the top κ bones per vertex.
+  int top_k = 4;
+
+  // The paper defaults of a named model (see model_names()).
+  static ModelConfig defaults(const std::string& name, std::int64_t in_dim, std::int64_t out_dim = -1);
+  std::string to_text() const;
+  // Throws InvalidArgument naming the line for unknown keys / bad values.
+  static ModelConfig from_text(const std::string& text);
+  bool operator==(const ModelConfig&) const = default;
+};
+
+}  // namespace gatcore::models

@@ -1,0 +1,36 @@
+#pragma once
+// The trainer's input: one character (displacement task: one character in
+// one pose) in memory. The character pipeline (issue 4) produces these from
+// its datasets; tests build them procedurally.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gatcore/ops.hpp"
+
+namespace gatcore::models {
+
+struct Sample {
+  std::string name;
+  GraphPtr graph;     // mesh graph (undirected, with self-loops)
+  Tensor features;    // [n, d] raw (un-normalised) node features
+  Tensor target;      // [n, 3] displacements or [n, |B|] skin weights
+  // Optional: per vertex, the nearest vertices by geodesic distance, nearest
+  // first (the vertex itself first), at least max pool size long. If empty,
+  // the trainer uses breadth-first hop distance on `graph` instead.
+  std::vector<std::vector<std::int32_t>> geodesic_neighbours;
+  Tensor bone_mask;   // optional [1, |B|] 0/1 mask of the character's bones in the super skeleton
+};
+
+// Per-column feature normalisation (z-score) and a scalar target scale for
+// displacements; stored in checkpoints with the model.
+struct Normaliser {
+  Tensor mean, inv_std;     // [1, d]
+  float target_scale = 1.f; // targets are multiplied by it for training; predictions divided
+
+  bool defined() const { return mean.defined(); }
+  static Normaliser fit(const std::vector<Sample>& samples, bool scale_targets);
+  Tensor apply(const Tensor& features) const;  // a new tensor
+};
+
+}  // namespace gatcore::models

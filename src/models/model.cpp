@@ -1,0 +1,67 @@
+#include "gatcore/models/model.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+#include "models_impl.hpp"
+
+namespace gatcore::models {
+
+std::vector<std::string> model_names() {
+  return {"densegats", "densegats-noself", "densegats-nodense", "origat",
+          "neuroskinning", "neuroskinning-nopool", "fc", "pointnet"};
+}
+
+std::unique_ptr<Model> make_model(const ModelConfig& cfg, std::uint64_t seed) {
+  GATCORE_CHECK(cfg.in_dim > 0, "model '", cfg.name, "': in_dim must be positive");
+  GATCORE_CHECK(cfg.out_dim > 0, "model '", cfg.name, "': out_dim must be positive");
+  GATCORE_CHECK(cfg.task == Task::weights || cfg.out_dim == 3, "model '", cfg.name,
+                "': the displacement task has 3 outputs, got out_dim ", cfg.out_dim);
+  const std::string& n = cfg.name;
+  if (n.rfind("densegats", 0) == 0) return detail::make_densegats(cfg, seed);
+  if (n == "origat") return detail::make_origat(cfg, seed);
+  if (n.rfind("neuroskinning", 0) == 0) return detail::make_neuroskinning(cfg, seed);
+  if (n == "fc") return detail::make_fc(cfg, seed);
+  if (n == "pointnet") return detail::make_pointnet(cfg, seed);
+  ModelConfig::defaults(n, 1);  // throws the "unknown model" message
+  return nullptr;
+}
+
+Var Model::output(const Var& logits, const Batch& b) const {
+  if (cfg_.task == Task::displacement) return logits;
+  return masked_softmax(logits, b.mask);
+}
+
+Var masked_softmax(const Var& logits, const Tensor& mask) {
+  if (!mask.defined() || mask.rows() == 1) return row_softmax(logits, mask);
+  check_shape(mask, logits.rows(), logits.cols(), "bone mask");
+  // Per-row masks: a -1e9 bias underflows exp() to exactly 0.
+  Tensor bias = Tensor::empty(mask.rows(), mask.cols());
+  for (std::int64_t i = 0; i < mask.rows(); ++i)
+    for (std::int64_t j = 0; j < mask.cols(); ++j) bias.at(i, j) = mask.at(i, j) != 0.f ? 0.f : -1e9f;
+  return row_softmax(add(logits, Var(bias)));
+}
+
+Tensor top_k_renormalise(const Tensor& w, int k) {
+  GATCORE_CHECK(k > 0, "top_k_renormalise: k must be positive, got ", k);
+  Tensor out = Tensor::zeros(w.rows(), w.cols());
+  std::vector<std::int64_t> idx(std::size_t(w.cols()));
+  for (std::int64_t i = 0; i < w.rows(); ++i) {
+    std::iota(idx.begin(), idx.end(), 0);
+    const auto kk = std::min<std::int64_t>(k, w.cols());
+    std::partial_sort(idx.begin(), idx.begin() + kk, idx.end(), [&](std::int64_t a, std::int64_t b) {
+      return w.at(i, a) > w.at(i, b) || (w.at(i, a) == w.at(i, b) && a < b);
+    });
+    double s = 0;
+    for (std::int64_t t = 0; t < kk; ++t) s += std::max(0.f, w.at(i, idx[t]));
+    for (std::int64_t t = 0; t < kk; ++t)
+      out.at(i, idx[t]) = s > 0 ? float(std::max(0.f, w.at(i, idx[t])) / s) : 0.f;
+  }
+  return out;
+}
+
+Var task_loss(Task t, const Var& pred, const Tensor& target) {
+  return t == Task::weights ? kl_div_loss(pred, target) : mse_loss(pred, target);
+}
+
+}  // namespace gatcore::models

@@ -1,0 +1,77 @@
+// NeuroSkinning (Liu et al. 2019) and its w/o-pooling ablation:
+//   stage1:     MLP 128, 64 (Linear → BN → LeakyReLU 0.1) → gc.0 (F' 64, K 4, pool 16)
+//   global:     MLP 512, 1024 on stage 1 → max pool per character → broadcast
+//   local:      gc.1 (64, K 2, pool 24) → gc.2 (64, K 2, pool 64)
+//   classifier: concat(local, global) → 1024 → 512 → out → softmax (masked)
+// With task = displacement: out = 3, no softmax (DenseGATs' comparison).
+#include "gatcore/nn/gc_unit.hpp"
+#include "gatcore/nn/mlp.hpp"
+#include "gatcore/nn/pooling.hpp"
+#include "models_impl.hpp"
+
+namespace gatcore::models::detail {
+namespace {
+
+class NeuroSkinning final : public Model {
+ public:
+  NeuroSkinning(const ModelConfig& c, std::uint64_t seed) : Model(c) {
+    GATCORE_CHECK(!c.gc_heads.empty() && c.gc_heads.size() == c.gc_dims.size() && c.gc_dims.size() == c.gc_pool.size(),
+                  "neuroskinning: gc_heads, gc_dims and gc_pool must have the same (non-zero) length");
+    nn::Rng init(seed);
+    rng_ = nn::Rng(seed ^ 0x9e3779b97f4a7c15ull);
+    const nn::Scope root{&reg_, ""};
+    nn::DenseLayerOptions dl{Activation::leaky_relu, c.slope, c.batch_norm, 0.f, nn::Init::glorot};
+    stage1_ = nn::Mlp(root.sub("stage1"), c.in_dim, c.stage1, 0, dl, init);
+    std::int64_t w = stage1_.out_width(c.in_dim);
+    for (std::size_t k = 0; k < c.gc_heads.size(); ++k) {
+      nn::GcUnitOptions go{int(c.gc_heads[k]), int(c.gc_dims[k]), int(c.gc_pool[k]), c.pool, c.slope};
+      gc_.emplace_back(root.sub("gc").sub(std::int64_t(k)), w, go, init);
+      w = gc_.back().out();
+      if (k == 0) {
+        global_ = nn::Mlp(root.sub("global"), w, c.global_mlp, 0, dl, init);
+        global_width_ = global_.out_width(w);
+      }
+    }
+    classifier_ = nn::Mlp(root.sub("classifier"), w + global_width_, c.classifier, c.out_dim, dl, init);
+  }
+
+  std::vector<int> pool_sizes() const override {
+    std::vector<int> p;
+    if (cfg_.pool)
+      for (auto j : cfg_.gc_pool) p.push_back(int(j));
+    return p;
+  }
+
+  Var forward(const Batch& b, bool training) override {
+    auto nbr = [&](int j) -> GraphPtr {
+      if (!cfg_.pool) return nullptr;
+      auto it = b.neighbours.find(j);
+      GATCORE_CHECK(it != b.neighbours.end(), "neuroskinning: the batch has no neighbour graph for pool size ", j);
+      return it->second;
+    };
+    Var y = stage1_.forward(Var(b.x), training, rng_);
+    y = gc_[0].forward(b.graph, nbr(gc_[0].opt.pool_size), y);
+    Var glob = nn::global_max_broadcast(b.graph, global_.forward(y, training, rng_));
+    for (std::size_t k = 1; k < gc_.size(); ++k) y = gc_[k].forward(b.graph, nbr(gc_[k].opt.pool_size), y);
+    return output(classifier_.forward(concat({y, glob}), training, rng_), b);
+  }
+
+  void fold() override {
+    stage1_.fold();
+    global_.fold();
+    classifier_.fold();
+  }
+
+ private:
+  nn::Mlp stage1_, global_, classifier_;
+  std::vector<nn::GcUnit> gc_;
+  std::int64_t global_width_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Model> make_neuroskinning(const ModelConfig& cfg, std::uint64_t seed) {
+  return std::make_unique<NeuroSkinning>(cfg, seed);
+}
+
+}  // namespace gatcore::models::detail

@@ -1,0 +1,67 @@
+// Ori.GAT: `gat_layers` plain graph-attention layers (Veličković et al.):
+// K heads × F concatenated, LeakyReLU(0.2) logits; hidden layers use
+// LeakyReLU(0.01) (stand-in for the original ELU, which gatcore lacks); the
+// last layer is one head of width out_dim with no activation.
+// Parameters: layers.l.{W, att_dst, att_src, b}.
+#include <cmath>
+
+#include "gatcore/nn/linear.hpp"
+#include "models_impl.hpp"
+
+namespace gatcore::models::detail {
+namespace {
+
+class OriGat final : public Model {
+ public:
+  OriGat(const ModelConfig& c, std::uint64_t seed) : Model(c) {
+    GATCORE_CHECK(c.gat_layers >= 1, "origat: gat_layers must be >= 1");
+    nn::Rng init(seed);
+    const nn::Scope root{&reg_, ""};
+    std::int64_t w = c.in_dim;
+    for (int l = 0; l < c.gat_layers; ++l) {
+      const bool last = l + 1 == c.gat_layers;
+      const int H = last ? 1 : c.heads, F = last ? int(c.out_dim) : c.head_dim;
+      const nn::Scope s = root.sub("layers").sub(l);
+      Layer L;
+      L.heads = H;
+      L.W = s.param("W", nn::init_weight(w, std::int64_t(H) * F, nn::Init::glorot, init));
+      const float ab = std::sqrt(6.f / float(F + 1));
+      L.att_dst = s.param("att_dst", nn::uniform_tensor(H, F, ab, init));
+      L.att_src = s.param("att_src", nn::uniform_tensor(H, F, ab, init));
+      L.b = s.param("b", Tensor::zeros(1, std::int64_t(H) * F));
+      layers_.push_back(L);
+      w = std::int64_t(H) * F;
+    }
+  }
+
+  Var forward(const Batch& b, bool) override {
+    Var y(b.x);
+    for (std::size_t l = 0; l < layers_.size(); ++l) {
+      const Layer& L = layers_[l];
+      Var z = gat_additive(b.graph, linear(y, L.W, Var{}), L.att_dst, L.att_src, 0.2f);
+      y = add_bias(z, L.b);
+      if (l + 1 < layers_.size()) y = leaky_relu(y, 0.01f);
+    }
+    return output(y, b);
+  }
+
+ private:
+  struct Layer {
+    Var W, att_dst, att_src, b;
+    int heads = 1;
+  };
+  // z + b (b broadcast over rows) = linear(z, I, b) would cost a GEMM; use
+  // matmul of a ones column instead: ones[n,1] · b[1,C].
+  static Var add_bias(const Var& z, const Var& b) {
+    return add(z, matmul(Var(Tensor::full(z.rows(), 1, 1.f)), b));
+  }
+  std::vector<Layer> layers_;
+};
+
+}  // namespace
+
+std::unique_ptr<Model> make_origat(const ModelConfig& cfg, std::uint64_t seed) {
+  return std::make_unique<OriGat>(cfg, seed);
+}
+
+}  // namespace gatcore::models::detail

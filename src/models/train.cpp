@@ -1,0 +1,285 @@
+#include "gatcore/models/train.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <numeric>
+
+namespace gatcore::models {
+
+TrainOptions TrainOptions::defaults_for(const ModelConfig& cfg) {
+  TrainOptions o;
+  const bool ns = cfg.name.rfind("neuroskinning", 0) == 0 || cfg.name == "fc" || cfg.name == "pointnet";
+  if (ns) {
+    o.batch_size = 12;
+    o.sampling = Sampling::random;
+    o.sample_vertices = 2048;
+    o.schedule = Schedule::step;
+  }
+  return o;
+}
+
+float PlateauScheduler::step(float metric, float lr) {
+  if (!has_best || metric < best * (1.f - 1e-4f)) {
+    best = metric;
+    has_best = true;
+    bad_epochs = 0;
+    return lr;
+  }
+  if (++bad_epochs > patience) {
+    bad_epochs = 0;
+    return std::max(min_lr, lr * factor);
+  }
+  return lr;
+}
+
+std::vector<std::int32_t> sample_vertices(std::int64_t n, Sampling s, std::int64_t k, nn::Rng& rng) {
+  std::vector<std::int32_t> v;
+  if (s == Sampling::full || k >= n) {
+    v.resize(std::size_t(n));
+    std::iota(v.begin(), v.end(), 0);
+    return v;
+  }
+  if (s == Sampling::consecutive) {
+    const auto start = std::int32_t(rng.below(std::uint64_t(n - k + 1)));
+    v.resize(std::size_t(k));
+    std::iota(v.begin(), v.end(), start);
+    return v;
+  }
+  // Partial Fisher-Yates, then sorted (locality of the induced subgraph).
+  std::vector<std::int32_t> all(static_cast<std::size_t>(n));
+  std::iota(all.begin(), all.end(), 0);
+  for (std::int64_t i = 0; i < k; ++i) std::swap(all[std::size_t(i)], all[std::size_t(i + std::int64_t(rng.below(std::uint64_t(n - i))))]);
+  v.assign(all.begin(), all.begin() + k);
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+std::vector<std::vector<std::int32_t>> hop_neighbours(const CsrGraph& g, int k) {
+  const std::int64_t n = g.num_nodes;
+  std::vector<std::vector<std::int32_t>> out(static_cast<std::size_t>(n));
+  std::vector<std::int64_t> seen(std::size_t(n), -1);
+#pragma omp parallel for schedule(dynamic, 64) firstprivate(seen)
+  for (std::int64_t s = 0; s < n; ++s) {
+    auto& lst = out[std::size_t(s)];
+    lst.push_back(std::int32_t(s));
+    seen[std::size_t(s)] = s;
+    for (std::size_t head = 0; head < lst.size() && std::int64_t(lst.size()) < k; ++head) {
+      const std::int32_t u = lst[head];
+      for (std::int64_t e = g.indptr[u]; e < g.indptr[u + 1] && std::int64_t(lst.size()) < k; ++e) {
+        const std::int32_t w = g.indices[std::size_t(e)];
+        if (seen[std::size_t(w)] == s) continue;
+        seen[std::size_t(w)] = s;
+        lst.push_back(w);
+      }
+    }
+  }
+  return out;
+}
+
+namespace {
+
+Tensor gather_rows(const Tensor& t, const std::vector<std::int32_t>& rows, Tensor out, std::int64_t r0) {
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const float* src = t.row(rows[k]);
+    float* dst = out.row(r0 + std::int64_t(k));
+    std::copy(src, src + t.cols(), dst);
+  }
+  return out;
+}
+
+}  // namespace
+
+Batch make_batch(const std::vector<const Sample*>& samples, const std::vector<std::vector<std::int32_t>>& selections,
+                 const Normaliser& norm, const std::vector<int>& pool_sizes) {
+  GATCORE_CHECK(!samples.empty() && samples.size() == selections.size(), "make_batch: ", samples.size(),
+                " samples but ", selections.size(), " selections");
+  std::vector<CsrGraph> subs(samples.size());
+  std::vector<std::vector<std::int32_t>> sel(samples.size());
+  std::int64_t total = 0;
+  const std::int64_t d = samples[0]->features.cols();
+  const bool has_target = samples[0]->target.defined();
+  const std::int64_t tc = has_target ? samples[0]->target.cols() : 0;
+  bool any_mask = false;
+  for (std::size_t b = 0; b < samples.size(); ++b) {
+    const Sample& s = *samples[b];
+    GATCORE_CHECK(s.graph != nullptr, "sample '", s.name, "': no graph");
+    const std::int64_t n = s.graph->num_nodes;
+    check_shape(s.features, n, d, ("features of sample '" + s.name + "'").c_str());
+    if (has_target) check_shape(s.target, n, tc, ("target of sample '" + s.name + "'").c_str());
+    sel[b] = selections[b];
+    if (sel[b].empty()) {
+      sel[b].resize(std::size_t(n));
+      std::iota(sel[b].begin(), sel[b].end(), 0);
+      subs[b] = *s.graph;
+    } else {
+      subs[b] = induced_subgraph(*s.graph, sel[b]);
+    }
+    total += std::int64_t(sel[b].size());
+    any_mask = any_mask || s.bone_mask.defined();
+  }
+  Batch out;
+  std::vector<const CsrGraph*> ptrs;
+  for (auto& g : subs) ptrs.push_back(&g);
+  out.graph = samples.size() == 1 ? share(subs[0]) : share(batch_graphs(ptrs));
+  Tensor raw = Tensor::empty(total, d);
+  if (has_target) out.target = Tensor::empty(total, tc);
+  std::int64_t r0 = 0;
+  for (std::size_t b = 0; b < samples.size(); ++b) {
+    gather_rows(samples[b]->features, sel[b], raw, r0);
+    if (has_target) gather_rows(samples[b]->target, sel[b], out.target, r0);
+    r0 += std::int64_t(sel[b].size());
+  }
+  out.x = norm.defined() ? norm.apply(raw) : raw;
+  if (has_target && norm.target_scale != 1.f)
+    for (std::int64_t i = 0; i < total; ++i)
+      for (std::int64_t j = 0; j < tc; ++j) out.target.at(i, j) *= norm.target_scale;
+  check_node_features(*out.graph, out.x, "batch features");
+
+  if (any_mask) {
+    // One [1, B] mask if all agree, else per-row [n, B].
+    const std::int64_t B = tc > 0 ? tc : samples[0]->bone_mask.cols();
+    bool uniform = true;
+    for (std::size_t b = 1; b < samples.size(); ++b) {
+      const Tensor &m0 = samples[0]->bone_mask, &mb = samples[b]->bone_mask;
+      if (!m0.defined() || !mb.defined() || m0.to_vector() != mb.to_vector()) uniform = false;
+    }
+    if (uniform) {
+      out.mask = samples[0]->bone_mask.clone();
+    } else {
+      out.mask = Tensor::full(total, B, 1.f);
+      r0 = 0;
+      for (std::size_t b = 0; b < samples.size(); ++b) {
+        const Tensor& m = samples[b]->bone_mask;
+        for (std::size_t i = 0; i < sel[b].size(); ++i)
+          for (std::int64_t j = 0; j < B && m.defined(); ++j) out.mask.at(r0 + std::int64_t(i), j) = m.at(0, j);
+        r0 += std::int64_t(sel[b].size());
+      }
+    }
+  }
+
+  if (!pool_sizes.empty()) {
+    const int kmax = *std::max_element(pool_sizes.begin(), pool_sizes.end());
+    // Per sample: neighbour lists in local (selection) ids, nearest first.
+    std::vector<std::vector<std::vector<std::int32_t>>> local(samples.size());
+    for (std::size_t b = 0; b < samples.size(); ++b) {
+      const Sample& s = *samples[b];
+      if (s.geodesic_neighbours.empty()) {
+        local[b] = hop_neighbours(subs[b], kmax);
+        continue;
+      }
+      GATCORE_CHECK(std::int64_t(s.geodesic_neighbours.size()) == s.graph->num_nodes, "sample '", s.name,
+                    "': geodesic_neighbours has ", s.geodesic_neighbours.size(), " rows, the mesh ",
+                    s.graph->num_nodes, " vertices");
+      std::vector<std::int32_t> to_local(std::size_t(s.graph->num_nodes), -1);
+      for (std::size_t i = 0; i < sel[b].size(); ++i) to_local[std::size_t(sel[b][i])] = std::int32_t(i);
+      local[b].resize(sel[b].size());
+      for (std::size_t i = 0; i < sel[b].size(); ++i) {
+        for (std::int32_t v : s.geodesic_neighbours[std::size_t(sel[b][i])]) {
+          if (std::int64_t(local[b][i].size()) >= kmax) break;
+          if (to_local[std::size_t(v)] >= 0) local[b][i].push_back(to_local[std::size_t(v)]);
+        }
+        if (local[b][i].empty()) local[b][i].push_back(std::int32_t(i));
+      }
+    }
+    for (int J : pool_sizes) {
+      if (out.neighbours.count(J)) continue;
+      std::vector<std::vector<std::int32_t>> rows;
+      rows.reserve(std::size_t(total));
+      std::int32_t off = 0;
+      for (std::size_t b = 0; b < samples.size(); ++b) {
+        for (const auto& lst : local[b]) {
+          std::vector<std::int32_t> r;
+          for (std::size_t t = 0; t < lst.size() && int(t) < J; ++t) r.push_back(lst[t] + off);
+          rows.push_back(std::move(r));
+        }
+        off += std::int32_t(sel[b].size());
+      }
+      out.neighbours[J] = share(graph_from_neighbour_lists(total, rows));
+    }
+  }
+  return out;
+}
+
+Trainer::Trainer(Model& model, TrainOptions opt, Normaliser norm)
+    : model_(model), opt_(opt), norm_(std::move(norm)), adam_(model.parameters(), AdamOptions{opt.lr}),
+      rng_(opt.seed ^ 0x5851f42d4c957f2dull) {
+  plateau_.factor = opt.plateau_factor;
+  plateau_.patience = opt.plateau_patience;
+  plateau_.min_lr = opt.min_lr;
+}
+
+EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vector<Sample>& val,
+                              const BatchCallback& on_batch) {
+  GATCORE_CHECK(!train.empty(), "Trainer: no training samples");
+  const auto t0 = std::chrono::steady_clock::now();
+  EpochStats st;
+  st.epoch = ++epoch_;
+  std::vector<std::size_t> order(train.size());
+  std::iota(order.begin(), order.end(), 0);
+  for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng_.below(i)]);
+  const auto bs = std::size_t(std::max(1, opt_.batch_size));
+  const std::int64_t nb = std::int64_t((train.size() + bs - 1) / bs);
+  const std::vector<int> pools = model_.pool_sizes();
+  double sum = 0;
+  for (std::int64_t b = 0; b < nb; ++b) {
+    std::vector<const Sample*> smp;
+    std::vector<std::vector<std::int32_t>> sel;
+    for (std::size_t k = std::size_t(b) * bs; k < std::min(train.size(), std::size_t(b + 1) * bs); ++k) {
+      const Sample& s = train[order[k]];
+      smp.push_back(&s);
+      sel.push_back(sample_vertices(s.graph->num_nodes, opt_.sampling, opt_.sample_vertices, rng_));
+    }
+    Batch batch = make_batch(smp, sel, norm_, pools);
+    Var loss = task_loss(model_.config().task, model_.forward(batch, true), batch.target);
+    adam_.zero_grad();
+    backward(loss);
+    const double l = loss.value().at(0, 0);
+    GATCORE_CHECK(std::isfinite(l), "training diverged at epoch ", epoch_, ", batch ", b + 1, " (loss ", l,
+                  "); try a smaller learning rate");
+    adam_.step();
+    sum += l;
+    st.samples += std::int64_t(smp.size());
+    if (on_batch) on_batch(epoch_, b + 1, nb, l);
+  }
+  st.batches = nb;
+  st.train_loss = sum / double(nb);
+  if (!val.empty()) st.val_loss = evaluate(val);
+  const float metric = float(st.val_loss >= 0 ? st.val_loss : st.train_loss);
+  if (opt_.schedule == Schedule::plateau) {
+    adam_.set_lr(plateau_.step(metric, adam_.lr()));
+  } else if (opt_.step_every > 0 && epoch_ % opt_.step_every == 0) {
+    adam_.set_lr(std::max(opt_.min_lr, adam_.lr() * opt_.step_gamma));
+  }
+  st.lr = adam_.lr();
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return st;
+}
+
+double Trainer::evaluate(const std::vector<Sample>& samples) {
+  NoGradGuard ng;
+  double sum = 0;
+  for (const Sample& s : samples) {
+    Batch b = make_batch({&s}, {{}}, norm_, model_.pool_sizes());
+    sum += task_loss(model_.config().task, model_.forward(b, false), b.target).value().at(0, 0);
+  }
+  return samples.empty() ? 0.0 : sum / double(samples.size());
+}
+
+Tensor predict(Model& model, const Sample& s, const Normaliser& norm, int top_k) {
+  NoGradGuard ng;
+  Sample copy = s;
+  copy.target = Tensor{};
+  Batch b = make_batch({&copy}, {{}}, norm, model.pool_sizes());
+  Tensor y = model.forward(b, false).value().clone();
+  if (model.config().task == Task::displacement) {
+    if (norm.target_scale != 1.f)
+      for (std::int64_t i = 0; i < y.rows(); ++i)
+        for (std::int64_t j = 0; j < y.cols(); ++j) y.at(i, j) /= norm.target_scale;
+    return y;
+  }
+  return top_k > 0 ? top_k_renormalise(y, top_k) : y;
+}
+
+}  // namespace gatcore::models

@@ -1,0 +1,191 @@
+// Checkpoints: bit-exact round trip, resume = uninterrupted training, and
+// every kind of bad file rejected with a message naming file and problem.
+#include <catch2/catch.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+
+#include "gatcore/models/checkpoint.hpp"
+#include "model_fixtures.hpp"
+
+using namespace gatcore;
+using namespace gatcore::models;
+
+namespace {
+
+std::string tmp_path(const std::string& name) { return "test_checkpoint_" + name + ".gcm"; }
+
+std::string slurp(const std::string& p) {
+  std::ifstream is(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>()};
+}
+void spit(const std::string& p, const std::string& s) {
+  std::ofstream os(p, std::ios::binary | std::ios::trunc);
+  os.write(s.data(), std::streamsize(s.size()));
+}
+
+ModelConfig small_config(const std::string& name) {
+  ModelConfig c = ModelConfig::defaults(name, 9, name == "neuroskinning" ? 5 : 3);
+  c.modules = 2;
+  c.blocks = 2;
+  c.heads = 2;
+  c.head_dim = 4;
+  c.transform = {8};
+  c.head = {16};
+  c.stage1 = {16};
+  c.gc_heads = {2, 1, 1};
+  c.gc_dims = {8, 8, 8};
+  c.gc_pool = {4, 6, 8};
+  c.global_mlp = {16};
+  c.classifier = {16};
+  return c;
+}
+
+std::vector<Sample> data_for(const ModelConfig& c) {
+  const bool w = c.task == Task::weights;
+  return {fixtures::wave_sample(7, 6, 0.f, w), fixtures::wave_sample(7, 6, 0.9f, w), fixtures::wave_sample(6, 6, 0.4f, w)};
+}
+
+}  // namespace
+
+TEST_CASE("checkpoint round trip is bit-exact, including BatchNorm running stats and normalisation") {
+  for (const std::string name : {"densegats", "neuroskinning"}) {
+    INFO("model " << name);
+    ModelConfig cfg = small_config(name);
+    auto m = make_model(cfg, 11);
+    auto data = data_for(cfg);
+    Normaliser norm = Normaliser::fit(data, cfg.task == Task::displacement);
+    TrainOptions o = TrainOptions::defaults_for(cfg);
+    o.sampling = Sampling::full;
+    o.batch_size = 2;
+    Trainer t(*m, o, norm);
+    t.run_epoch(data);
+    t.run_epoch(data);
+    const std::string path = tmp_path(name);
+    save_checkpoint(path, *m, norm, &t, {{"skeleton", "hips,spine,arm"}});
+    LoadedModel l = load_checkpoint(path);
+    CHECK(l.model->config() == cfg);
+    CHECK(l.file.metadata.at("skeleton") == "hips,spine,arm");
+    for (const auto& p : m->registry().params)
+      CHECK(l.model->registry().find_param(p.name)->value().to_vector() == p.var.value().to_vector());
+    for (const auto& b : m->registry().buffers)
+      CHECK(l.model->registry().find_buffer(b.name)->to_vector() == b.tensor.to_vector());
+    CHECK(l.norm.mean.to_vector() == norm.mean.to_vector());
+    CHECK(l.norm.inv_std.to_vector() == norm.inv_std.to_vector());
+    CHECK(l.norm.target_scale == norm.target_scale);
+    // Identical outputs on a full mesh.
+    Tensor a = predict(*m, data[0], norm), b = predict(*l.model, data[0], l.norm);
+    CHECK(a.to_vector() == b.to_vector());
+    std::remove(path.c_str());
+  }
+}
+
+TEST_CASE("resuming from a checkpoint gives the same next epoch as uninterrupted training") {
+  ModelConfig cfg = small_config("densegats");
+  auto data = data_for(cfg);
+  Normaliser norm = Normaliser::fit(data, true);
+  TrainOptions o = TrainOptions::defaults_for(cfg);
+  o.sample_vertices = 20;  // consecutive sampling: exercises the RNG
+  o.batch_size = 2;
+  o.seed = 3;
+  auto m = make_model(cfg, 5);
+  Trainer t(*m, o, norm);
+  t.run_epoch(data, {data[2]});
+  t.run_epoch(data, {data[2]});
+  const std::string path = tmp_path("resume");
+  save_checkpoint(path, *m, norm, &t);
+  const EpochStats uninterrupted = t.run_epoch(data, {data[2]});
+
+  LoadedModel l = load_checkpoint(path);
+  Trainer t2(*l.model, o, l.norm);
+  restore_training_state(l.file, t2, path);
+  CHECK(t2.epoch() == 2);
+  const EpochStats resumed = t2.run_epoch(data, {data[2]});
+  CHECK(resumed.epoch == 3);
+  CHECK(resumed.train_loss == uninterrupted.train_loss);
+  CHECK(resumed.val_loss == uninterrupted.val_loss);
+  CHECK(resumed.lr == uninterrupted.lr);
+  for (const auto& p : m->registry().params)
+    CHECK(l.model->registry().find_param(p.name)->value().to_vector() == p.var.value().to_vector());
+  std::remove(path.c_str());
+}
+
+TEST_CASE("bad checkpoint files are rejected with messages naming the file and the problem") {
+  ModelConfig cfg = small_config("densegats");
+  auto m = make_model(cfg, 1);
+  const std::string good = tmp_path("good"), bad = tmp_path("bad");
+  save_checkpoint(good, *m, Normaliser{});
+  const std::string bytes = slurp(good);
+  auto rejects = [&](const std::string& contents, const std::string& msg) {
+    spit(bad, contents);
+    INFO("expecting: " << msg);
+    CHECK_THROWS_WITH(load_checkpoint(bad), Catch::Contains("checkpoint '" + bad + "'") && Catch::Contains(msg));
+  };
+  SECTION("missing") {
+    CHECK_THROWS_WITH(load_checkpoint("no_such_file.gcm"), Catch::Contains("'no_such_file.gcm': cannot open"));
+  }
+  SECTION("truncated") {
+    rejects(bytes.substr(0, 5), "truncated");
+    rejects(bytes.substr(0, 40), "truncated");
+    rejects(bytes.substr(0, bytes.size() / 2), "truncated");
+    rejects(bytes.substr(0, bytes.size() - 4), "truncated");
+  }
+  SECTION("wrong magic") {
+    rejects("PK\x03\x04 this is a zip file, not a model at all", "wrong magic");
+    std::string other = bytes;
+    other.replace(other.find("gatcore-checkpoint"), 7, "torchxx");
+    rejects(other, "wrong magic");
+  }
+  SECTION("corrupted data") {
+    std::string c = bytes;
+    c[c.size() - 3] ^= 0x40;
+    rejects(c, "checksum mismatch");
+    rejects(bytes + "junk", "trailing bytes");
+  }
+  SECTION("unknown tensor, missing tensor, shape mismatch, bad config") {
+    CheckpointFile f = read_checkpoint_file(good);
+    CheckpointFile u = f;
+    u.tensors.emplace_back("modules.9.blocks.0.W", Tensor::zeros(2, 2));
+    write_checkpoint_file(bad, u);
+    CHECK_THROWS_WITH(load_checkpoint(bad), Catch::Contains("unknown tensor 'modules.9.blocks.0.W'"));
+    CheckpointFile mi = f;
+    mi.tensors.erase(mi.tensors.begin());
+    write_checkpoint_file(bad, mi);
+    CHECK_THROWS_WITH(load_checkpoint(bad), Catch::Contains("missing tensor 'transform.0.lin.W'"));
+    CheckpointFile sh = f;
+    sh.tensors[0].second = Tensor::zeros(9, 7);
+    write_checkpoint_file(bad, sh);
+    CHECK_THROWS_WITH(load_checkpoint(bad),
+                      Catch::Contains("shape mismatch for 'transform.0.lin.W': file [9, 7], model [9, 8]"));
+    CheckpointFile bc = f;
+    bc.metadata["config"] = "name = densegats\nheads = lots\n";
+    write_checkpoint_file(bad, bc);
+    CHECK_THROWS_WITH(load_checkpoint(bad), Catch::Contains("bad model configuration"));
+    CheckpointFile v = f;
+    write_checkpoint_file(bad, v);
+    std::string vb = slurp(bad);
+    vb.replace(vb.find("\"format_version\":\"1\""), 20, "\"format_version\":\"7\"");
+    rejects(vb, "unsupported format version '7'");
+    // A checkpoint without training state can't resume.
+    LoadedModel l = load_checkpoint(good);
+    Trainer t(*l.model, TrainOptions{}, l.norm);
+    CHECK_THROWS_WITH(restore_training_state(l.file, t, good), Catch::Contains("cannot resume"));
+  }
+  std::remove(good.c_str());
+  std::remove(bad.c_str());
+}
+
+TEST_CASE("checkpoint writes are atomic: no temp file left, an existing file is replaced whole") {
+  auto m = make_model(small_config("origat"), 1);
+  const std::string path = tmp_path("atomic");
+  spit(path, "old contents");
+  save_checkpoint(path, *m, Normaliser{});
+  CHECK_FALSE(std::ifstream(path + ".tmp").good());
+  CHECK_NOTHROW(load_checkpoint(path));
+  CHECK_THROWS_WITH(save_checkpoint("/nonexistent_dir/x.gcm", *m, Normaliser{}), Catch::Contains("cannot open"));
+  auto f = make_model(small_config("fc"), 1);
+  f->fold_batch_norm();
+  CHECK_THROWS_WITH(save_checkpoint(path, *f, Normaliser{}), Catch::Contains("folded"));
+  std::remove(path.c_str());
+}

@@ -1,0 +1,127 @@
+// Trainer pieces: vertex sampling, block-diagonal batches with neighbour
+// graphs, schedules, determinism.
+#include <catch2/catch.hpp>
+
+#include <set>
+
+#include <omp.h>
+
+#include "gatcore/models/train.hpp"
+#include "model_fixtures.hpp"
+
+using namespace gatcore;
+using namespace gatcore::models;
+
+TEST_CASE("vertex sampling: consecutive runs, random distinct vertices, full meshes") {
+  nn::Rng rng(1);
+  auto c = sample_vertices(5000, Sampling::consecutive, 1000, rng);
+  REQUIRE(c.size() == 1000);
+  for (std::size_t k = 1; k < c.size(); ++k) CHECK(c[k] == c[k - 1] + 1);
+  CHECK(c.back() < 5000);
+  auto r = sample_vertices(5000, Sampling::random, 2048, rng);
+  REQUIRE(r.size() == 2048);
+  CHECK(std::set<std::int32_t>(r.begin(), r.end()).size() == 2048);
+  CHECK(std::is_sorted(r.begin(), r.end()));
+  CHECK(sample_vertices(300, Sampling::random, 2048, rng).size() == 300);  // small mesh: everything
+  CHECK(sample_vertices(300, Sampling::full, 10, rng).size() == 300);
+  nn::Rng a(9), b(9);
+  CHECK(sample_vertices(5000, Sampling::random, 100, a) == sample_vertices(5000, Sampling::random, 100, b));
+}
+
+TEST_CASE("paper training defaults per model family") {
+  auto dg = TrainOptions::defaults_for(ModelConfig::defaults("densegats", 71));
+  CHECK(dg.batch_size == 8);
+  CHECK(dg.sampling == Sampling::consecutive);
+  CHECK(dg.sample_vertices == 1000);
+  CHECK(dg.schedule == Schedule::plateau);
+  CHECK(dg.plateau_factor == 0.75f);
+  CHECK(dg.plateau_patience == 8);
+  CHECK(dg.min_lr == 5e-7f);
+  auto ns = TrainOptions::defaults_for(ModelConfig::defaults("neuroskinning", 71, 30));
+  CHECK(ns.batch_size == 12);
+  CHECK(ns.sampling == Sampling::random);
+  CHECK(ns.sample_vertices == 2048);
+  CHECK(ns.schedule == Schedule::step);
+  CHECK(ns.step_gamma == 0.99f);
+  CHECK(ns.step_every == 200);
+}
+
+TEST_CASE("ReduceLROnPlateau: factor after patience bad epochs, floored at min lr") {
+  PlateauScheduler p{0.75f, 5e-7f, 2};
+  float lr = 1e-3f;
+  lr = p.step(1.f, lr);
+  lr = p.step(1.f, lr);
+  lr = p.step(1.f, lr);
+  CHECK(lr == 1e-3f);
+  lr = p.step(1.f, lr);  // third bad epoch > patience 2
+  CHECK(lr == Approx(7.5e-4f));
+  lr = p.step(0.5f, lr);  // improvement resets
+  CHECK(p.bad_epochs == 0);
+  for (int k = 0; k < 400; ++k) lr = p.step(0.9f, lr);
+  CHECK(lr == 5e-7f);
+}
+
+TEST_CASE("batches: induced subgraphs stacked block-diagonally with per-character neighbour graphs") {
+  Sample a = fixtures::wave_sample(6, 5, 0.f, true), b = fixtures::wave_sample(5, 4, 1.f, true);
+  a.bone_mask = Tensor::from(1, 5, {1, 1, 1, 0, 1});
+  std::vector<std::int32_t> sa = {0, 1, 2, 6, 7, 8}, sb = {};
+  Batch bt = make_batch({&a, &b}, {sa, sb}, Normaliser{}, {3, 4});
+  CHECK(bt.graph->num_nodes == 6 + 20);
+  CHECK(bt.graph->segment_ptr == std::vector<std::int64_t>{0, 6, 26});
+  CHECK(bt.x.at(3, 0) == a.features.at(6, 0));
+  CHECK(bt.target.at(10, 2) == b.target.at(4, 2));
+  REQUIRE(bt.neighbours.count(3));
+  const CsrGraph& n3 = *bt.neighbours.at(3);
+  for (std::int64_t i = 0; i < n3.num_nodes; ++i) {
+    CHECK(n3.degree(i) == 3);
+    for (std::int64_t e = n3.indptr[i]; e < n3.indptr[i + 1]; ++e)
+      CHECK((i < 6) == (n3.indices[std::size_t(e)] < 6));  // never crosses characters
+  }
+  // Different masks -> per-row mask; b has none -> all ones.
+  REQUIRE(bt.mask.rows() == 26);
+  CHECK(bt.mask.at(0, 3) == 0.f);
+  CHECK(bt.mask.at(10, 3) == 1.f);
+  // Given geodesic neighbour lists are restricted to the selection.
+  a.geodesic_neighbours = hop_neighbours(*a.graph, 10);
+  Batch g = make_batch({&a}, {sa}, Normaliser{}, {4});
+  CHECK(g.neighbours.at(4)->num_nodes == 6);
+  CHECK(g.neighbours.at(4)->degree(0) == 4);
+}
+
+TEST_CASE("training is deterministic given a seed") {
+  for (const std::string name : {"densegats", "neuroskinning", "fc"}) {
+    INFO("model " << name);
+    ModelConfig c = ModelConfig::defaults(name, 9, name == "densegats" ? 3 : 5);
+    const bool w = c.task == Task::weights;
+    std::vector<Sample> data = {fixtures::wave_sample(8, 6, 0.f, w), fixtures::wave_sample(8, 6, 0.5f, w),
+                                fixtures::wave_sample(7, 6, 1.f, w)};
+    if (name == "densegats") {
+      c.modules = 1;
+      c.blocks = 2;
+    }
+    auto run = [&](std::uint64_t seed) {
+      auto m = make_model(c, seed);
+      TrainOptions o = TrainOptions::defaults_for(c);
+      o.sample_vertices = 25;
+      o.batch_size = 2;
+      o.seed = seed;
+      Trainer t(*m, o, Normaliser::fit(data, c.task == Task::displacement));
+      for (int e = 0; e < 3; ++e) t.run_epoch(data);
+      std::vector<float> all;
+      for (const auto& p : m->registry().params) {
+        auto v = p.var.value().to_vector();
+        all.insert(all.end(), v.begin(), v.end());
+      }
+      return all;
+    };
+    const auto a = run(7), b = run(7), d = run(8);
+    CHECK(a == b);
+    CHECK(a != d);
+    // Every kernel reduces in a fixed order independent of the thread count.
+    const int nt = omp_get_max_threads();
+    omp_set_num_threads(nt == 1 ? 2 : 1);
+    const auto e = run(7);
+    omp_set_num_threads(nt);
+    CHECK(a == e);
+  }
+}
