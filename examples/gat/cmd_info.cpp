@@ -1,5 +1,6 @@
-// `gat info FILE`: what a character file holds (vertices, components, joints,
-// influences per vertex, clips). Bad files exit non-zero with the reason.
+// `gat info FILE`: what a character or motion file holds (vertices,
+// components, joints, influences per vertex, clips). Bad files exit non-zero
+// with the reason.
 #include <cctype>
 #include <cstdio>
 #include <cstring>
@@ -8,6 +9,7 @@
 
 #include "commands.hpp"
 #include "gatcore/character/gltf.hpp"
+#include "gatcore/character/motion.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;
@@ -59,12 +61,26 @@ void print_character(const Character& ch) {
   }
 }
 
+void print_motion(const Motion& m) {
+  const Skeleton& s = m.skeleton;
+  std::printf("motion     %s\n", m.name.c_str());
+  std::printf("joints     %d\n", s.num_joints());
+  std::printf("clips      1\n  %-32s %5zu frames at %g fps (%.2f s)\n", m.clip.name.c_str(), m.clip.frames.size(),
+              m.clip.fps, m.clip.frames.empty() ? 0.0 : (m.clip.frames.size() - 1) / m.clip.fps);
+  std::printf("skeleton\n");
+  std::vector<int> depth(static_cast<std::size_t>(s.num_joints()), 0);
+  for (std::int32_t j = 0; j < s.num_joints(); ++j) {
+    depth[j] = s.parents[j] >= 0 ? depth[s.parents[j]] + 1 : 0;
+    std::printf("  %3d %*s%s\n", j, 2 * depth[j], "", s.names[j].c_str());
+  }
+}
+
 }  // namespace
 
 int cmd_info(int argc, char** argv) {
   if (argc != 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     std::fprintf(argc == 2 ? stdout : stderr,
-                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf)\n");
+                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf) or a motion (.bvh)\n");
     return argc == 2 ? 0 : 2;
   }
   const std::string path = argv[1];
@@ -72,7 +88,11 @@ int cmd_info(int argc, char** argv) {
     print_character(load_gltf(path));
     return 0;
   }
-  throw gatcore::InvalidArgument(path + ": unknown file type (expected .glb or .gltf)");
+  if (ends_with(path, ".bvh")) {
+    print_motion(load_bvh(path));
+    return 0;
+  }
+  throw gatcore::InvalidArgument(path + ": unknown file type (expected .glb, .gltf or .bvh)");
 }
 
 }  // namespace gat

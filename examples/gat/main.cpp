@@ -9,7 +9,7 @@ namespace {
 
 constexpr gat::Command kCommands[] = {
     {"demo", gat::cmd_demo, "train a small DenseGATs on the embedded tube character, compare with LBS"},
-    {"info", gat::cmd_info, "print what a character file holds: vertices, components, joints, influences, clips"},
+    {"info", gat::cmd_info, "print what a character (.glb/.gltf) or motion (.bvh) file holds"},
 };
 
 int usage(int rc) {
