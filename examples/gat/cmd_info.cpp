@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "gatcore/character/gltf.hpp"
+#include "gatcore/character/import.hpp"
 #include "gatcore/character/motion.hpp"
 #include "gatcore/error.hpp"
 
@@ -80,19 +80,19 @@ void print_motion(const Motion& m) {
 int cmd_info(int argc, char** argv) {
   if (argc != 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     std::fprintf(argc == 2 ? stdout : stderr,
-                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf) or a motion (.bvh)\n");
+                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf / .fbx / .dae) or a motion (.bvh)\n");
     return argc == 2 ? 0 : 2;
   }
   const std::string path = argv[1];
-  if (ends_with(path, ".glb") || ends_with(path, ".gltf")) {
-    print_character(load_gltf(path));
+  if (ends_with(path, ".glb") || ends_with(path, ".gltf") || ends_with(path, ".fbx") || ends_with(path, ".dae")) {
+    print_character(load_character(path));
     return 0;
   }
   if (ends_with(path, ".bvh")) {
     print_motion(load_bvh(path));
     return 0;
   }
-  throw gatcore::InvalidArgument(path + ": unknown file type (expected .glb, .gltf or .bvh)");
+  throw gatcore::InvalidArgument(path + ": unknown file type (expected .glb, .gltf, .fbx, .dae or .bvh)");
 }
 
 }  // namespace gat
