@@ -7,6 +7,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libomp-dev libtbb-dev catch2 libbenchmark-dev
+  libtinygltf-dev nlohmann-json3-dev libassimp-dev
 )
 
 missing=()

@@ -15,6 +15,8 @@ struct Command {
 };
 
 int cmd_demo(int argc, char** argv);
-int cmd_train(int argc, char** argv), cmd_eval(int argc, char** argv);
+int cmd_train(int argc, char** argv);
+int cmd_eval(int argc, char** argv);
+int cmd_info(int argc, char** argv);
 
 }  // namespace gat

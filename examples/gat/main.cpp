@@ -9,7 +9,9 @@ namespace {
 
 constexpr gat::Command kCommands[] = {
     {"demo", gat::cmd_demo, "train a small DenseGATs on the embedded tube character, compare with LBS"},
-    {"train", gat::cmd_train, "train a model by name (densegats, neuroskinning, ...)"}, {"eval", gat::cmd_eval, "evaluate a checkpoint"},
+    {"train", gat::cmd_train, "train a model by name (densegats, neuroskinning, ...)"},
+    {"eval", gat::cmd_eval, "evaluate a checkpoint"},
+    {"info", gat::cmd_info, "print what a character (.glb/.gltf/.fbx) or motion (.bvh) file holds"},
 };
 
 int usage(int rc) {

@@ -1,0 +1,98 @@
+// `gat info FILE`: what a character or motion file holds (vertices,
+// components, joints, influences per vertex, clips). Bad files exit non-zero
+// with the reason.
+#include <cctype>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "gatcore/character/import.hpp"
+#include "gatcore/character/motion.hpp"
+#include "gatcore/error.hpp"
+
+using namespace gatcore::character;
+
+namespace gat {
+
+namespace {
+
+bool ends_with(const std::string& s, const char* suffix) {
+  const std::size_t n = std::strlen(suffix);
+  if (s.size() < n) return false;
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::tolower(static_cast<unsigned char>(s[s.size() - n + i])) != suffix[i]) return false;
+  return true;
+}
+
+void print_character(const Character& ch) {
+  const Mesh& m = ch.mesh;
+  const Skeleton& s = ch.skeleton;
+  const Components comp = connected_components(m);
+  std::printf("character  %s\n", ch.name.c_str());
+  std::printf("vertices   %lld welded (%lld in the file, %zu primitives)\n", static_cast<long long>(m.num_vertices()),
+              static_cast<long long>(ch.num_file_vertices()), ch.primitives.size());
+  std::printf("triangles  %lld\n", static_cast<long long>(m.num_triangles()));
+  std::printf("components %d\n", comp.count);
+  std::vector<int> weighted(static_cast<std::size_t>(s.num_joints()), 0);
+  for (std::int32_t j : m.weights.joint) weighted[j] = 1;
+  int weightless = 0;
+  for (int w : weighted) weightless += !w;
+  std::printf("joints     %d (%d without weights)\n", s.num_joints(), weightless);
+  // Influences per vertex histogram.
+  const std::int64_t maxk = m.weights.max_influences();
+  std::vector<long long> hist(static_cast<std::size_t>(maxk + 1), 0);
+  for (std::int64_t v = 0; v < m.num_vertices(); ++v) ++hist[m.weights.ptr[v + 1] - m.weights.ptr[v]];
+  std::printf("influences per vertex: mean %.2f, max %lld;",
+              m.num_vertices() ? static_cast<double>(m.weights.joint.size()) / static_cast<double>(m.num_vertices()) : 0.0,
+              static_cast<long long>(maxk));
+  for (std::int64_t k = 1; k <= maxk; ++k) std::printf(" %lld:%lld", static_cast<long long>(k), hist[k]);
+  std::printf("\n");
+  std::printf("clips      %zu\n", ch.clips.size());
+  for (const Clip& c : ch.clips)
+    std::printf("  %-32s %5zu frames at %g fps (%.2f s)\n", c.name.c_str(), c.frames.size(), c.fps,
+                c.frames.empty() ? 0.0 : (c.frames.size() - 1) / c.fps);
+  std::printf("skeleton\n");
+  std::vector<int> depth(static_cast<std::size_t>(s.num_joints()), 0);
+  for (std::int32_t j = 0; j < s.num_joints(); ++j) {
+    depth[j] = s.parents[j] >= 0 ? depth[s.parents[j]] + 1 : 0;
+    std::printf("  %3d %*s%s%s\n", j, 2 * depth[j], "", s.names[j].c_str(), weighted[j] ? "" : "  (no weights)");
+  }
+}
+
+void print_motion(const Motion& m) {
+  const Skeleton& s = m.skeleton;
+  std::printf("motion     %s\n", m.name.c_str());
+  std::printf("joints     %d\n", s.num_joints());
+  std::printf("clips      1\n  %-32s %5zu frames at %g fps (%.2f s)\n", m.clip.name.c_str(), m.clip.frames.size(),
+              m.clip.fps, m.clip.frames.empty() ? 0.0 : (m.clip.frames.size() - 1) / m.clip.fps);
+  std::printf("skeleton\n");
+  std::vector<int> depth(static_cast<std::size_t>(s.num_joints()), 0);
+  for (std::int32_t j = 0; j < s.num_joints(); ++j) {
+    depth[j] = s.parents[j] >= 0 ? depth[s.parents[j]] + 1 : 0;
+    std::printf("  %3d %*s%s\n", j, 2 * depth[j], "", s.names[j].c_str());
+  }
+}
+
+}  // namespace
+
+int cmd_info(int argc, char** argv) {
+  if (argc != 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    std::fprintf(argc == 2 ? stdout : stderr,
+                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf / .fbx / .dae) or a motion (.bvh)\n");
+    return argc == 2 ? 0 : 2;
+  }
+  const std::string path = argv[1];
+  if (ends_with(path, ".glb") || ends_with(path, ".gltf") || ends_with(path, ".fbx") || ends_with(path, ".dae")) {
+    print_character(load_character(path));
+    return 0;
+  }
+  if (ends_with(path, ".bvh")) {
+    print_motion(load_bvh(path));
+    return 0;
+  }
+  throw gatcore::InvalidArgument(path + ": unknown file type (expected .glb, .gltf, .fbx, .dae or .bvh)");
+}
+
+}  // namespace gat

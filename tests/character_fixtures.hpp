@@ -1,0 +1,224 @@
+#pragma once
+// Characters the character tests build themselves, so the suite covers the
+// importer and the deformers without downloaded data:
+// - tube(): a capped cylinder along +Y bound to two joints (root at y = 0,
+//   "bone1" at y = length / 2) with smooth weights across the middle;
+// - skinned_glb(): the same tube written as a binary glTF by hand, with a UV
+//   seam (duplicated vertices), a second primitive (a disjoint box on bone1),
+//   a weightless helper joint, an animation, and switches that break it.
+// - data_dir(): $GATCORE_DATA when set, else ../shared/data; empty when absent.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "gatcore/character/character.hpp"
+
+namespace charfix {
+
+inline std::filesystem::path data_dir() {
+  namespace fs = std::filesystem;
+  if (const char* e = std::getenv("GATCORE_DATA"); e && *e)  // when set, it is the only place looked at
+    return fs::is_directory(fs::path(e) / "characters") ? fs::path(e) : fs::path();
+  for (fs::path p : {fs::path(GATCORE_SOURCE_DIR) / ".." / "shared" / "data", fs::current_path() / ".." / "shared" / "data"})
+    if (fs::is_directory(p / "characters")) return p;
+  return {};
+}
+
+struct Tube {
+  std::vector<float> pos;
+  std::vector<std::int32_t> tris;
+  std::vector<std::uint16_t> joints;  // 4 per vertex
+  std::vector<float> weights;         // 4 per vertex
+};
+
+// rings x segments grid; `seam` duplicates the first column as a last one
+// (a UV seam); `caps` adds a centre vertex and a fan at each end.
+inline Tube tube_geometry(int rings, int segments, float length, float radius, bool seam, bool caps,
+                          float blend = 0.3f) {
+  Tube t;
+  const int cols = segments + (seam ? 1 : 0);
+  for (int r = 0; r < rings; ++r) {
+    const float y = length * r / (rings - 1);
+    const float s = blend > 0.0f ? std::clamp((y / length - 0.5f + 0.5f * blend) / blend, 0.0f, 1.0f)
+                                  : (y / length < 0.5f ? 0.0f : 1.0f);  // blend over the middle
+    for (int c = 0; c < cols; ++c) {
+      const float a = 2.0f * 3.14159265358979f * (c % segments) / segments;
+      t.pos.insert(t.pos.end(), {radius * std::cos(a), y, radius * std::sin(a)});
+      t.joints.insert(t.joints.end(), {0, 1, 0, 0});
+      t.weights.insert(t.weights.end(), {1.0f - s, s, 0.0f, 0.0f});
+    }
+  }
+  auto id = [&](int r, int c) { return r * cols + (seam ? c : c % segments); };
+  for (int r = 0; r + 1 < rings; ++r)
+    for (int c = 0; c < segments; ++c) {
+      const int a = id(r, c), b = id(r, c + 1), d = id(r + 1, c), e = id(r + 1, c + 1);
+      t.tris.insert(t.tris.end(), {a, d, b, b, d, e});
+    }
+  if (caps) {
+    for (int end = 0; end < 2; ++end) {
+      const int r = end ? rings - 1 : 0;
+      const int centre = static_cast<int>(t.pos.size() / 3);
+      t.pos.insert(t.pos.end(), {0.0f, end ? length : 0.0f, 0.0f});
+      t.joints.insert(t.joints.end(), {static_cast<std::uint16_t>(end), 0, 0, 0});
+      t.weights.insert(t.weights.end(), {1.0f, 0.0f, 0.0f, 0.0f});
+      for (int c = 0; c < segments; ++c) {
+        if (end) t.tris.insert(t.tris.end(), {centre, id(r, c + 1), id(r, c)});
+        else t.tris.insert(t.tris.end(), {centre, id(r, c), id(r, c + 1)});
+      }
+    }
+  }
+  return t;
+}
+
+// A Mesh + Skeleton of the capped tube (no seam), joints root and bone1.
+// `blend`: fraction of the length over which the weights go from root to
+// bone1 (0: rigid, a step at the middle).
+inline gatcore::character::Character tube_character(int rings = 24, int segments = 24, float length = 2.0f,
+                                                    float radius = 0.25f, float blend = 0.3f) {
+  using namespace gatcore::character;
+  const Tube t = tube_geometry(rings, segments, length, radius, false, true, blend);
+  Character ch;
+  ch.name = "tube";
+  ch.mesh.positions = t.pos;
+  ch.mesh.triangles = t.tris;
+  const std::size_t n = t.pos.size() / 3;
+  for (std::size_t v = 0; v < n; ++v) {
+    for (int k = 0; k < 4; ++k)
+      if (t.weights[4 * v + k] > 0.0f) {
+        ch.mesh.weights.joint.push_back(t.joints[4 * v + k]);
+        ch.mesh.weights.weight.push_back(t.weights[4 * v + k]);
+      }
+    ch.mesh.weights.ptr.push_back(static_cast<std::int64_t>(ch.mesh.weights.joint.size()));
+    ch.welded_from_file.push_back(static_cast<std::int32_t>(v));
+  }
+  Skeleton& s = ch.skeleton;
+  s.names = {"root", "bone1"};
+  s.parents = {-1, 0};
+  s.rest_local.resize(2);
+  s.rest_local[1].translation = {0.0f, length / 2, 0.0f};
+  s.root_parent = {mat4_identity(), mat4_identity()};
+  s.inverse_bind = {mat4_identity(), inverse(to_matrix(s.rest_local[1]))};
+  return ch;
+}
+
+struct GlbOptions {
+  bool skin = true;          // false: no skin at all
+  int bad_joint = -1;        // >= 0: vertex 0 gets weight on this skin joint index
+  bool nan = false;          // a NaN position
+  bool animation = true;
+  bool second_primitive = true;
+};
+
+inline void pad4(std::string& s, char c) {
+  while (s.size() % 4) s.push_back(c);
+}
+
+// The tube (6 rings x 8 segments + seam column) as a .glb.
+inline std::string skinned_glb(const GlbOptions& o = {}) {
+  Tube t = tube_geometry(6, 8, 2.0f, 0.25f, true, false);
+  for (float& w : t.weights) w *= 0.9f;  // not summing to 1: the importer renormalises
+  if (o.bad_joint >= 0) {
+    t.joints[0] = static_cast<std::uint16_t>(o.bad_joint);
+    t.weights[0] = 0.5f;
+  }
+  if (o.nan) t.pos[4] = std::nanf("");
+  // Box on bone1: 8 corners, 12 triangles, weight 1 on joint 1.
+  std::vector<float> bpos;
+  for (int i = 0; i < 8; ++i) bpos.insert(bpos.end(), {0.5f + 0.1f * (i & 1), 1.5f + 0.1f * ((i >> 1) & 1), 0.1f * (i >> 2)});
+  const std::vector<std::uint32_t> btri = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                                           2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  std::vector<std::uint16_t> bj;
+  std::vector<float> bw;
+  for (int i = 0; i < 8; ++i) {
+    bj.insert(bj.end(), {1, 0, 0, 0});
+    bw.insert(bw.end(), {1.0f, 0.0f, 0.0f, 0.0f});
+  }
+  std::vector<std::uint32_t> tri(t.tris.begin(), t.tris.end());
+
+  std::string bin;
+  std::ostringstream views, accs;
+  int nviews = 0;
+  auto add = [&](const void* data, std::size_t bytes) {
+    pad4(bin, '\0');
+    if (nviews) views << ",";
+    views << "{\"buffer\":0,\"byteOffset\":" << bin.size() << ",\"byteLength\":" << bytes << "}";
+    bin.append(static_cast<const char*>(data), bytes);
+    return nviews++;
+  };
+  int naccs = 0;
+  auto acc = [&](int view, int ctype, std::size_t count, const char* type, const std::string& extra = "") {
+    if (naccs) accs << ",";
+    accs << "{\"bufferView\":" << view << ",\"componentType\":" << ctype << ",\"count\":" << count << ",\"type\":\""
+         << type << "\"" << extra << "}";
+    return naccs++;
+  };
+  const std::size_t nv = t.pos.size() / 3;
+  const int aP = acc(add(t.pos.data(), t.pos.size() * 4), 5126, nv, "VEC3",
+                     ",\"min\":[-0.25,0,-0.25],\"max\":[0.25,2,0.25]");
+  const int aJ = acc(add(t.joints.data(), t.joints.size() * 2), 5123, nv, "VEC4");
+  const int aW = acc(add(t.weights.data(), t.weights.size() * 4), 5126, nv, "VEC4");
+  const int aI = acc(add(tri.data(), tri.size() * 4), 5125, tri.size(), "SCALAR");
+  const int bP = acc(add(bpos.data(), bpos.size() * 4), 5126, 8, "VEC3", ",\"min\":[0.5,1.5,0],\"max\":[0.6,1.6,0.1]");
+  const int bJ = acc(add(bj.data(), bj.size() * 2), 5123, 8, "VEC4");
+  const int bW = acc(add(bw.data(), bw.size() * 4), 5126, 8, "VEC4");
+  const int bI = acc(add(btri.data(), btri.size() * 4), 5125, btri.size(), "SCALAR");
+  // Inverse bind matrices: root at 0, bone1 at y = 1, helper at y = 1.5.
+  std::vector<float> ibm;
+  for (float y : {0.0f, 1.0f, 1.5f}) ibm.insert(ibm.end(), {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -y, 0, 1});
+  const int aIbm = acc(add(ibm.data(), ibm.size() * 4), 5126, 3, "MAT4");
+  const std::vector<float> times = {0.0f, 1.0f};
+  const float s = std::sin(0.25f * 3.14159265f), c = std::cos(0.25f * 3.14159265f);
+  const std::vector<float> rots = {0, 0, 0, 1, s, 0, 0, c};  // 0 -> 90 degrees about x
+  const int aT = acc(add(times.data(), 8), 5126, 2, "SCALAR", ",\"min\":[0],\"max\":[1]");
+  const int aR = acc(add(rots.data(), 32), 5126, 2, "VEC4");
+
+  std::ostringstream j;
+  j << "{\"asset\":{\"version\":\"2.0\",\"generator\":\"gatcore tests\"},\"scene\":0,\"scenes\":[{\"nodes\":[0,3]}],";
+  j << "\"nodes\":[{\"name\":\"root\",\"children\":[1]},{\"name\":\"bone1\",\"translation\":[0,1,0],\"children\":[2]},"
+       "{\"name\":\"helper\",\"translation\":[0,0.5,0]},{\"name\":\"body\",\"mesh\":0"
+    << (o.skin ? ",\"skin\":0" : "") << "}],";
+  j << "\"meshes\":[{\"name\":\"tube\",\"primitives\":[{\"attributes\":{\"POSITION\":" << aP << ",\"JOINTS_0\":" << aJ
+    << ",\"WEIGHTS_0\":" << aW << "},\"indices\":" << aI << "}";
+  if (o.second_primitive)
+    j << ",{\"attributes\":{\"POSITION\":" << bP << ",\"JOINTS_0\":" << bJ << ",\"WEIGHTS_0\":" << bW
+      << "},\"indices\":" << bI << "}";
+  j << "]}],";
+  if (o.skin) j << "\"skins\":[{\"joints\":[0,1,2],\"inverseBindMatrices\":" << aIbm << "}],";
+  if (o.animation)
+    j << "\"animations\":[{\"name\":\"bend\",\"samplers\":[{\"input\":" << aT << ",\"output\":" << aR
+      << ",\"interpolation\":\"LINEAR\"}],\"channels\":[{\"sampler\":0,\"target\":{\"node\":1,\"path\":\"rotation\"}}]}],";
+  pad4(bin, '\0');
+  j << "\"accessors\":[" << accs.str() << "],\"bufferViews\":[" << views.str() << "],\"buffers\":[{\"byteLength\":"
+    << bin.size() << "}]}";
+  std::string json = j.str();
+  pad4(json, ' ');
+  std::string glb;
+  auto u32 = [&](std::uint32_t x) { glb.append(reinterpret_cast<const char*>(&x), 4); };
+  glb += "glTF";
+  u32(2);
+  u32(static_cast<std::uint32_t>(12 + 8 + json.size() + 8 + bin.size()));
+  u32(static_cast<std::uint32_t>(json.size()));
+  u32(0x4E4F534Au);
+  glb += json;
+  u32(static_cast<std::uint32_t>(bin.size()));
+  u32(0x004E4942u);
+  glb += bin;
+  return glb;
+}
+
+inline std::string write_temp(const std::string& name, const std::string& bytes) {
+  const auto dir = std::filesystem::temp_directory_path() / "gatcore_char_tests";
+  std::filesystem::create_directories(dir);
+  const auto p = dir / name;
+  std::ofstream(p, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  return p.string();
+}
+
+}  // namespace charfix

@@ -1,0 +1,179 @@
+// glTF import: a generated skinned .glb (always), the bad-file cases, and the
+// real characters in ../shared/data (skipped visibly when absent).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "character_fixtures.hpp"
+#include "gatcore/character/deform.hpp"
+#include "gatcore/character/gltf.hpp"
+#include "gatcore/error.hpp"
+
+using namespace gatcore::character;
+using Catch::Matchers::Contains;
+
+namespace {
+
+float max_abs_diff(const std::vector<float>& a, const std::vector<float>& b) {
+  REQUIRE(a.size() == b.size());
+  float m = 0.0f;
+  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::abs(a[i] - b[i]));
+  return m;
+}
+
+float extent(const std::vector<float>& p) {
+  float lo[3], hi[3];
+  for (int c = 0; c < 3; ++c) lo[c] = hi[c] = p[c];
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    lo[i % 3] = std::min(lo[i % 3], p[i]);
+    hi[i % 3] = std::max(hi[i % 3], p[i]);
+  }
+  return std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+}
+
+}  // namespace
+
+TEST_CASE("glTF import of a generated skinned character", "[character][gltf]") {
+  const std::string path = charfix::write_temp("tube.glb", charfix::skinned_glb());
+  const Character ch = load_gltf(path);
+  // 6 rings x (8 + 1 seam) file vertices + an 8-vertex box; the seam welds away.
+  CHECK(ch.num_file_vertices() == 6 * 9 + 8);
+  CHECK(ch.mesh.num_vertices() == 6 * 8 + 8);
+  CHECK(ch.mesh.num_triangles() == 5 * 8 * 2 + 12);
+  CHECK(ch.primitives.size() == 2);
+  REQUIRE(ch.skeleton.num_joints() == 3);
+  CHECK(ch.skeleton.names == std::vector<std::string>{"root", "bone1", "helper"});
+  CHECK(ch.skeleton.parents == std::vector<std::int32_t>{-1, 0, 1});
+  // The helper joint has no weight but stays in the skeleton.
+  for (std::int32_t j : ch.mesh.weights.joint) CHECK(j != 2);
+  // Two disjoint components (tube, box).
+  CHECK(connected_components(ch.mesh).count == 2);
+  // Weights renormalised (the file's sum to 0.9).
+  ch.mesh.validate(3);
+  // The weld map points every file vertex at a welded vertex at the same place.
+  const charfix::Tube t = charfix::tube_geometry(6, 8, 2.0f, 0.25f, true, false);
+  for (std::int64_t v = 0; v < 6 * 9; ++v)
+    for (int c = 0; c < 3; ++c) CHECK(ch.mesh.positions[3 * ch.welded_from_file[v] + c] == Approx(t.pos[3 * v + c]));
+  CHECK(ch.welded_from_file[8] == ch.welded_from_file[0]);  // the seam column
+  // Clip sampled at 30 fps over one second.
+  REQUIRE(ch.clips.size() == 1);
+  CHECK(ch.clips[0].name == "bend");
+  CHECK(ch.clips[0].frames.size() == 31);
+  const Quat q = ch.clips[0].frames[15].local[1].rotation;  // halfway: 45 degrees about x
+  CHECK(q[0] == Approx(std::sin(3.14159265f / 8)).margin(1e-5));
+  // Skinning the bind pose (and the file's rest pose, identical here) gives the mesh back.
+  CHECK(max_abs_diff(linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, bind_pose(ch.skeleton))),
+                     ch.mesh.positions) < 1e-5f);
+  CHECK(max_abs_diff(linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, rest_pose(ch.skeleton))),
+                     ch.mesh.positions) < 1e-5f);
+}
+
+TEST_CASE("glTF import rejects bad files with the file and the problem", "[character][gltf]") {
+  const std::string good = charfix::skinned_glb();
+  SECTION("missing file") {
+    CHECK_THROWS_WITH(load_gltf("/nonexistent/dir/x.glb"), Contains("/nonexistent/dir/x.glb") && Contains("cannot open"));
+  }
+  SECTION("truncated") {
+    const std::string p = charfix::write_temp("truncated.glb", good.substr(0, good.size() / 2));
+    CHECK_THROWS_AS(load_gltf(p), gatcore::InvalidArgument);
+    CHECK_THROWS_WITH(load_gltf(p), Contains("truncated.glb"));
+  }
+  SECTION("wrong magic") {
+    std::string bad = good;
+    bad[0] = 'X';
+    const std::string p = charfix::write_temp("magic.glb", bad);
+    CHECK_THROWS_WITH(load_gltf(p), Contains("magic.glb") && Contains("not a readable glTF"));
+  }
+  SECTION("missing skin") {
+    charfix::GlbOptions o;
+    o.skin = false;
+    const std::string p = charfix::write_temp("noskin.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("noskin.glb") && Contains("no skin"));
+  }
+  SECTION("weights on a missing joint") {
+    charfix::GlbOptions o;
+    o.bad_joint = 7;
+    const std::string p = charfix::write_temp("badjoint.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("badjoint.glb") && Contains("joint 7") && Contains("only 3 joints"));
+  }
+  SECTION("NaN position") {
+    charfix::GlbOptions o;
+    o.nan = true;
+    const std::string p = charfix::write_temp("nan.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("nan.glb") && Contains("POSITION") && Contains("not finite"));
+  }
+  SECTION("garbage json") {
+    const std::string p = charfix::write_temp("garbage.gltf", "{\"asset\": {\"version\": \"2.0\"");
+    CHECK_THROWS_WITH(load_gltf(p), Contains("garbage.gltf"));
+  }
+}
+
+namespace {
+struct Expected {
+  const char* file;
+  std::int64_t file_vertices, vertices;
+  std::int32_t joints;
+};
+}  // namespace
+
+TEST_CASE("glTF import of the shared real characters", "[character][gltf][data]") {
+  const auto dir = charfix::data_dir();
+  if (dir.empty()) {
+    WARN("SKIPPED: data not found (../shared/data or $GATCORE_DATA)");
+    return;
+  }
+  namespace fs = std::filesystem;
+  // Counts measured on the shared files: file vertices, welded vertices, joints.
+  const Expected expected[] = {
+      {"characters/khronos/CesiumMan.glb", 3273, 2338, 19},
+      {"characters/khronos/RiggedFigure.glb", 370, 130, 19},
+      {"characters/khronos/RiggedSimple.glb", 96, 96, 2},
+  };
+  for (const auto& e : expected) {
+    const fs::path p = dir / e.file;
+    if (!fs::exists(p)) {
+      WARN("SKIPPED: data not found: " << p);
+      continue;
+    }
+    INFO(p);
+    const Character ch = load_gltf(p.string());
+    CHECK(ch.num_file_vertices() == e.file_vertices);
+    CHECK(ch.mesh.num_vertices() == e.vertices);
+    CHECK(ch.skeleton.num_joints() == e.joints);
+    const auto lbs = linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, bind_pose(ch.skeleton)));
+    CHECK(max_abs_diff(lbs, ch.mesh.positions) < 1e-4f * extent(ch.mesh.positions));
+  }
+  // Every Quaternius character loads; the humanoids have the README's joint counts.
+  int loaded = 0;
+  for (const char* sub : {"modular_men", "modular_women", "animals", "creatures"}) {
+    const fs::path d = dir / "characters" / "quaternius" / sub;
+    if (!fs::is_directory(d)) {
+      WARN("SKIPPED: data not found: " << d);
+      continue;
+    }
+    for (const auto& f : fs::directory_iterator(d)) {
+      if (f.path().extension() != ".glb") continue;
+      INFO(f.path());
+      if (std::string(sub) == "modular_women" && f.path().filename() == "Adventurer.glb") {
+        // A genuinely broken file: the legs' WEIGHTS_0 are NaN (1860 vertices).
+        CHECK_THROWS_WITH(load_gltf(f.path().string()),
+                          Contains("Adventurer.glb") && Contains("Adventurer_Legs") && Contains("not finite"));
+        continue;
+      }
+      GltfImportOptions opt;
+      opt.load_clips = std::string(sub) == "animals";  // keep the test fast: clips of one pack
+      const Character ch = load_gltf(f.path().string(), opt);
+      ++loaded;
+      CHECK(ch.mesh.num_vertices() > 0);
+      CHECK(ch.mesh.num_vertices() <= ch.num_file_vertices());
+      if (std::string(sub) == "modular_men") CHECK(ch.skeleton.num_joints() == 49);
+      if (std::string(sub) == "modular_women") CHECK(ch.skeleton.num_joints() == 51);
+      if (std::string(sub) == "animals") CHECK(!ch.clips.empty());
+      const auto lbs = linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, bind_pose(ch.skeleton)));
+      CHECK(max_abs_diff(lbs, ch.mesh.positions) < 1e-4f * extent(ch.mesh.positions));
+    }
+  }
+  CHECK(loaded > 0);
+}

@@ -1,0 +1,167 @@
+// BVH import (assimp), retargeting, random poses.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+
+#include "character_fixtures.hpp"
+#include "gatcore/character/deform.hpp"
+#include "gatcore/character/features.hpp"
+#include "gatcore/character/gltf.hpp"
+#include "gatcore/character/motion.hpp"
+#include "gatcore/error.hpp"
+
+using namespace gatcore::character;
+using Catch::Matchers::Contains;
+
+namespace {
+
+const char* kBvh = R"(HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation
+  JOINT LeftUpLeg
+  {
+    OFFSET 1 -1 0
+    CHANNELS 3 Zrotation Yrotation Xrotation
+    JOINT LeftLeg
+    {
+      OFFSET 0 -4 0
+      CHANNELS 3 Zrotation Yrotation Xrotation
+      End Site
+      {
+        OFFSET 0 -4 0
+      }
+    }
+  }
+  JOINT Spine
+  {
+    OFFSET 0 2 0
+    CHANNELS 3 Zrotation Yrotation Xrotation
+    End Site
+    {
+      OFFSET 0 3 0
+    }
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.0333333
+0 10 0 0 0 0 0 0 0 0 0 0 0 0 0
+0 10 1 0 0 0 90 0 0 0 0 0 0 0 0
+0 10 2 0 0 0 0 0 0 0 0 0 0 0 45
+)";
+
+Vec3 pos(const std::vector<Mat4>& g, std::int32_t j) { return mat4_translation(g[j]); }
+
+}  // namespace
+
+TEST_CASE("BVH import of a generated motion", "[character][bvh]") {
+  const Motion m = load_bvh(charfix::write_temp("small.bvh", kBvh));
+  REQUIRE(m.skeleton.num_joints() == 4);
+  CHECK(m.skeleton.names == std::vector<std::string>{"Hips", "LeftUpLeg", "LeftLeg", "Spine"});
+  CHECK(m.skeleton.parents == std::vector<std::int32_t>{-1, 0, 1, 0});
+  REQUIRE(m.clip.frames.size() == 3);
+  CHECK(m.clip.fps == Approx(30.0f).epsilon(1e-3));
+  const auto g0 = global_transforms(m.skeleton, m.clip.frames[0]);
+  CHECK(pos(g0, 2)[1] == Approx(5.0f));
+  // Frame 1: LeftUpLeg rotated 90 degrees about Z, hips moved to z = 1.
+  const auto g1 = global_transforms(m.skeleton, m.clip.frames[1]);
+  CHECK(pos(g1, 2)[0] == Approx(5.0f).margin(1e-4));
+  CHECK(pos(g1, 2)[1] == Approx(9.0f).margin(1e-4));
+  CHECK(pos(g1, 2)[2] == Approx(1.0f).margin(1e-4));
+  // The rest pose is the offsets.
+  const auto gr = global_transforms(m.skeleton, rest_pose(m.skeleton));
+  CHECK(pos(gr, 3)[1] == Approx(2.0f));
+}
+
+TEST_CASE("BVH import rejects bad files", "[character][bvh]") {
+  CHECK_THROWS_WITH(load_bvh("/nonexistent/walk.bvh"), Contains("/nonexistent/walk.bvh") && Contains("cannot open"));
+  const std::string full = kBvh;
+  const std::string t = charfix::write_temp("truncated.bvh", full.substr(0, full.size() / 3));
+  CHECK_THROWS_AS(load_bvh(t), gatcore::InvalidArgument);
+  CHECK_THROWS_WITH(load_bvh(t), Contains("truncated.bvh"));
+  const std::string g = charfix::write_temp("garbage.bvh", "this is not a motion file\n");
+  CHECK_THROWS_WITH(load_bvh(g), Contains("garbage.bvh"));
+}
+
+TEST_CASE("retargeting a motion onto its own skeleton reproduces it, grounded", "[character][retarget]") {
+  const Motion m = load_bvh(charfix::write_temp("self.bvh", kBvh));
+  RetargetMap map;
+  for (const auto& n : m.skeleton.names) map.pairs.push_back({n, n});
+  const Clip c = retarget(m, m.skeleton, mat4_identity(), map);
+  REQUIRE(c.frames.size() == m.clip.frames.size());
+  for (std::size_t f = 0; f < c.frames.size(); ++f) {
+    const auto a = global_transforms(m.skeleton, m.clip.frames[f]), b = global_transforms(m.skeleton, c.frames[f]);
+    // Same shape relative to the hips; the hips start at their rest place
+    // and the lowest joint of the clip (y = 5) lands on the rest ground (y = -5).
+    for (std::int32_t j = 0; j < m.skeleton.num_joints(); ++j)
+      for (int k = 0; k < 3; ++k) CHECK(pos(b, j)[k] - pos(b, 0)[k] == Approx(pos(a, j)[k] - pos(a, 0)[k]).margin(1e-4));
+    CHECK(pos(b, 0)[0] == Approx(0.0f).margin(1e-5));
+    CHECK(pos(b, 0)[1] == Approx(0.0f).margin(1e-5));
+    CHECK(pos(b, 0)[2] == Approx(static_cast<float>(f)).margin(1e-5));
+  }
+  RetargetMap none;
+  none.pairs = {{"Nope", "Nada"}};
+  CHECK_THROWS_WITH(retarget(m, m.skeleton, mat4_identity(), none), Contains("no joint of the motion maps"));
+}
+
+TEST_CASE("random poses: deterministic per seed, within limits, roots at rest", "[character][pose]") {
+  const Character ch = charfix::tube_character();
+  const Pose rest = rest_pose(ch.skeleton);
+  const auto limits = uniform_limits(ch.skeleton, 0.4f);
+  std::mt19937 a(11), b(11), c(12);
+  const Pose pa = random_pose(ch.skeleton, rest, limits, a), pb = random_pose(ch.skeleton, rest, limits, b),
+             pc = random_pose(ch.skeleton, rest, limits, c);
+  CHECK(pa.local[1].rotation == pb.local[1].rotation);
+  CHECK(pa.local[1].rotation != pc.local[1].rotation);
+  CHECK(pa.local[0].rotation == rest.local[0].rotation);
+  for (int i = 0; i < 200; ++i) {
+    const Pose p = random_pose(ch.skeleton, rest, limits, c);
+    const float w = std::abs(p.local[1].rotation[3]);
+    CHECK(2.0f * std::acos(std::min(w, 1.0f)) <= std::sqrt(3.0f) * 0.4f + 1e-4f);
+  }
+  auto bad = limits;
+  bad[1].lo[0] = 1.0f;
+  CHECK_THROWS(random_pose(ch.skeleton, rest, bad, c));
+}
+
+TEST_CASE("CMU motions import; a retargeted walk keeps a humanoid's feet on the ground", "[character][retarget][data]") {
+  const auto dir = charfix::data_dir();
+  const auto walk = dir / "motion" / "cmu" / "walk.bvh";
+  const auto farmer = dir / "characters" / "quaternius" / "modular_men" / "Farmer.glb";
+  if (dir.empty() || !std::filesystem::exists(walk) || !std::filesystem::exists(farmer)) {
+    WARN("SKIPPED: data not found (" << walk << ", " << farmer << ")");
+    return;
+  }
+  const Motion m = load_bvh(walk.string());
+  CHECK(m.skeleton.num_joints() == 31);
+  CHECK(m.clip.frames.size() == 344);
+  CHECK(m.clip.fps == Approx(120.0f).epsilon(1e-3));
+  const Character ch = load_gltf(farmer.string());
+  const NormalisationStats st = compute_normalisation(ch);
+  const Clip c = retarget(m, ch.skeleton, st.bind_to_world);
+  REQUIRE(c.frames.size() == 344);
+  // World rest mesh: its lowest point is the ground.
+  const auto rest = linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, world_bind_pose(ch.skeleton, st.bind_to_world)));
+  float ground = 1e30f, top = -1e30f;
+  for (std::size_t v = 0; v < rest.size() / 3; ++v) {
+    ground = std::min(ground, rest[3 * v + 1]);
+    top = std::max(top, rest[3 * v + 1]);
+  }
+  const float height = top - ground;
+  REQUIRE(height > 0.0f);
+  for (std::size_t f = 0; f < c.frames.size(); f += 20) {
+    const auto p = linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, c.frames[f]));
+    float lo = 1e30f, hi = -1e30f;
+    for (std::size_t v = 0; v < p.size() / 3; ++v) {
+      lo = std::min(lo, p[3 * v + 1]);
+      hi = std::max(hi, p[3 * v + 1]);
+    }
+    INFO("frame " << f << ": lowest " << lo << ", ground " << ground << ", height " << height);
+    CHECK(lo > ground - 0.05f * height);  // feet do not sink into the ground
+    CHECK(lo < ground + 0.10f * height);  // and one foot stays near it
+    CHECK(hi - lo > 0.8f * height);       // upright
+  }
+}
