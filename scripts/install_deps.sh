@@ -8,6 +8,9 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libomp-dev libtbb-dev catch2 libbenchmark-dev
   libtinygltf-dev nlohmann-json3-dev libassimp-dev
+  # Vulkan backend: headers/loader, the GLSL compiler, and Mesa lavapipe (a
+  # CPU Vulkan device) so the Vulkan tests run without a GPU.
+  glslang-tools libvulkan-dev mesa-vulkan-drivers vulkan-tools
 )
 
 missing=()

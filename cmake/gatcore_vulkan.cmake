@@ -1,0 +1,61 @@
+# The Vulkan compute backend (src/vulkan/, shaders/), included by the top-level
+# CMakeLists.txt after the gatcore target exists.
+#
+# GATCORE_VULKAN=AUTO builds it when the Vulkan headers/loader and
+# glslangValidator are found, ON requires them, OFF skips it. Every
+# shaders/*.comp is compiled to SPIR-V at build time (one custom command per
+# shader; glslangValidator's depfile tracks the shaders/*.glsl it includes) and
+# embedded in the library as uint32_t arrays (a generated .cpp).
+set(GATCORE_HAVE_VULKAN OFF)
+set(GATCORE_CONFIG_FIND_VULKAN OFF)
+string(TOUPPER "${GATCORE_VULKAN}" _gatcore_vk_mode)
+if(NOT _gatcore_vk_mode STREQUAL "OFF")
+  find_package(Vulkan QUIET)
+  find_program(GATCORE_GLSLANG_VALIDATOR NAMES glslangValidator)
+  if(Vulkan_FOUND AND GATCORE_GLSLANG_VALIDATOR)
+    set(GATCORE_HAVE_VULKAN ON)
+  elseif(_gatcore_vk_mode STREQUAL "ON")
+    message(FATAL_ERROR "GATCORE_VULKAN=ON but Vulkan (found: ${Vulkan_FOUND}) or glslangValidator "
+                        "(${GATCORE_GLSLANG_VALIDATOR}) is missing; install libvulkan-dev and glslang-tools")
+  else()
+    message(STATUS "gatcore: Vulkan backend disabled (Vulkan or glslangValidator not found)")
+  endif()
+endif()
+
+if(GATCORE_HAVE_VULKAN)
+  message(STATUS "gatcore: Vulkan backend enabled (${GATCORE_GLSLANG_VALIDATOR})")
+  file(GLOB _gatcore_vk_sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/vulkan/*.cpp)
+  file(GLOB _gatcore_shaders CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/shaders/*.comp)
+  set(_spv_dir ${PROJECT_BINARY_DIR}/shaders)
+  file(MAKE_DIRECTORY ${_spv_dir})
+  set(_incs "")
+  set(_table "")
+  foreach(_shader ${_gatcore_shaders})
+    get_filename_component(_name ${_shader} NAME_WE)
+    set(_out ${_spv_dir}/${_name}.spv.inc)
+    add_custom_command(
+      OUTPUT ${_out}
+      COMMAND ${GATCORE_GLSLANG_VALIDATOR} -V --target-env vulkan1.1 -DELEM=float
+              -I${PROJECT_SOURCE_DIR}/shaders --vn gatcore_spv_${_name} --depfile ${_spv_dir}/${_name}.d
+              -o ${_out} ${_shader}
+      DEPENDS ${_shader}
+      DEPFILE ${_spv_dir}/${_name}.d
+      COMMENT "glslang: shaders/${_name}.comp"
+      VERBATIM)
+    list(APPEND _incs ${_out})
+    string(APPEND _gatcore_vk_includes "#include \"shaders/${_name}.spv.inc\"\n")
+    string(APPEND _gatcore_vk_table "    {\"${_name}\", gatcore_spv_${_name}, sizeof(gatcore_spv_${_name}) / 4},\n")
+  endforeach()
+  set(GATCORE_VK_SHADER_INCLUDES "${_gatcore_vk_includes}")
+  set(GATCORE_VK_SHADER_TABLE "${_gatcore_vk_table}")
+  configure_file(${PROJECT_SOURCE_DIR}/src/vulkan/shaders_embedded.cpp.in ${_spv_dir}/shaders_embedded.cpp @ONLY)
+  set_source_files_properties(${_spv_dir}/shaders_embedded.cpp PROPERTIES OBJECT_DEPENDS "${_incs}")
+  target_sources(gatcore PRIVATE ${_gatcore_vk_sources} ${_spv_dir}/shaders_embedded.cpp ${_incs})
+  target_include_directories(gatcore PRIVATE ${PROJECT_BINARY_DIR})
+  target_link_libraries(gatcore PRIVATE Vulkan::Vulkan)
+  target_compile_definitions(gatcore PUBLIC GATCORE_HAS_VULKAN=1)
+  get_target_property(_gatcore_type gatcore TYPE)
+  if(_gatcore_type STREQUAL "STATIC_LIBRARY")
+    set(GATCORE_CONFIG_FIND_VULKAN ON)
+  endif()
+endif()

@@ -1,0 +1,21 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// out[i, kF+f] = Σ_{e=(j->i)} alpha[e,k] z[j, kF+f]; one invocation per output element.
+#include "common.glsl"
+#include "elementwise.glsl"
+#include "graph.glsl"
+layout(push_constant) uniform Push { uint n; uint H; uint F; VIEW(alpha); VIEW(z); VIEW(o); } pc;
+BUF(0, alpha);
+BUF(1, z);
+BUF(2, o);
+IBUF(3, indptr);
+IBUF(4, indices);
+void main() {
+  uint id = flat_id();
+  uint C = pc.H * pc.F;
+  if (id >= pc.n * C) return;
+  uint i = id / C, c = id % C, k = c / pc.F;
+  float acc = 0.0;
+  for (uint e = uint(indptr[i]); e < uint(indptr[i + 1u]); ++e) acc += alpha[AT(alpha, e, k)] * z[AT(z, uint(indices[e]), c)];
+  o[AT(o, i, c)] = acc;
+}

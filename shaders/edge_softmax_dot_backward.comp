@@ -1,0 +1,23 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Pass 1 of the dot-product softmax backward, per (i, k):
+// g[e,k] = scale * alpha (d_alpha - Σ_row alpha d_alpha)  (stored for pass 2,
+// edge_softmax_dot_backward_h).
+#include "common.glsl"
+#include "elementwise.glsl"
+#include "graph.glsl"
+layout(push_constant) uniform Push { uint n; uint H; VIEW(alpha); VIEW(dalpha); VIEW(gs); float scale; } pc;
+BUF(0, alpha);
+BUF(1, dalpha);
+BUF(2, gs);
+IBUF(3, indptr);
+void main() {
+  uint id = flat_id();
+  if (id >= pc.n * pc.H) return;
+  uint i = id / pc.H, k = id % pc.H;
+  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  float S = 0.0;
+  for (uint e = b; e < e1; ++e) S += alpha[AT(alpha, e, k)] * dalpha[AT(dalpha, e, k)];
+  for (uint e = b; e < e1; ++e)
+    gs[AT(gs, e, k)] = pc.scale * alpha[AT(alpha, e, k)] * (dalpha[AT(dalpha, e, k)] - S);
+}

@@ -1,0 +1,15 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// y = a ⊙ b
+#include "common.glsl"
+#include "elementwise.glsl"
+layout(push_constant) uniform Push { uint rows; uint cols; VIEW(a); VIEW(b); VIEW(y); } pc;
+BUF(0, a);
+BUF(1, b);
+BUF(2, y);
+void main() {
+  uint i = flat_id();
+  if (i >= pc.rows * pc.cols) return;
+  uint r = i / pc.cols, c = i % pc.cols;
+  y[AT(y, r, c)] = a[AT(a, r, c)] * b[AT(b, r, c)];
+}

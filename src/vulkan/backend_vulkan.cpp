@@ -1,0 +1,603 @@
+// Backend for Device::vulkan: every entry records compute dispatches of the
+// shaders/ of the same name into the current command buffer (stream.cpp).
+// Entries without a shader yet throw "<op> is not implemented on vulkan";
+// nothing ever falls back to the CPU silently.
+//
+// Tensor views are bound at their (alignment-rounded) byte offset with the
+// residual element offset and row stride in push constants, so a binding
+// covers only the span a view touches. Elementwise ops split rows into chunks
+// whose spans fit maxStorageBufferRange (128 MiB on lavapipe), so tensors of
+// any size go through them; other ops require each operand's span to fit and
+// say so otherwise.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+
+#include "gatcore/backend.hpp"
+#include "src/vulkan/runtime.hpp"
+
+namespace gatcore::vk {
+
+namespace {
+
+[[noreturn]] void not_implemented(const char* op) {
+  throw Error(detail::cat(op, " is not implemented on vulkan (no shader yet); move the tensors to the CPU with "
+                              "to(t, Device::cpu) to run it there"));
+}
+
+void check_vk(const Tensor& t, const char* what) {
+  GATCORE_CHECK(t.defined(), what, ": tensor is undefined");
+  GATCORE_CHECK(t.device() == Device::vulkan, what, ": tensor lives on ", device_name(t.device()),
+                ", this op runs on vulkan");
+}
+
+std::uint32_t u32(std::int64_t v, const char* what) {
+  GATCORE_CHECK(v >= 0 && v < (std::int64_t{1} << 31), "vulkan: ", what, " = ", v, " exceeds 2^31");
+  return static_cast<std::uint32_t>(v);
+}
+
+// Collects bindings and push-constant words in shader declaration order.
+struct Launch {
+  std::vector<Binding> bindings;
+  std::vector<std::uint32_t> push;
+  Launch& u(std::int64_t v) {
+    push.push_back(u32(v, "size"));
+    return *this;
+  }
+  Launch& f(float v) {
+    push.push_back(std::bit_cast<std::uint32_t>(v));
+    return *this;
+  }
+  // A view: binding at the aligned byte offset, (residual offset, ld) pushed.
+  Launch& t(const Tensor& x, bool write, const char* what) {
+    check_vk(x, what);
+    const Context& c = ctx();
+    const Buffer* b = buffer_of(*x.storage());
+    const std::uint64_t start = static_cast<std::uint64_t>(x.offset()) * 4;
+    const std::uint64_t base = start - start % c.storage_align;
+    const std::uint64_t span =
+        x.rows() == 0 || x.cols() == 0 ? 4 : static_cast<std::uint64_t>((x.rows() - 1) * x.ld() + x.cols()) * 4;
+    std::uint64_t range = start - base + span;
+    range = std::min<std::uint64_t>((range + 3) / 4 * 4, b->size - base);
+    GATCORE_CHECK(range <= c.max_storage_range, "vulkan: ", what, " ", x.shape_str(), " spans ", range,
+                  " bytes, more than the device's maxStorageBufferRange (", c.max_storage_range,
+                  "); this op does not split its operands");
+    bindings.push_back({b->buffer, base, range, write});
+    push.push_back(static_cast<std::uint32_t>((start - base) / 4));
+    push.push_back(u32(x.ld(), "row stride"));
+    return *this;
+  }
+  // An optional view: undefined binds a dummy and pushes (0, 0).
+  Launch& opt(const Tensor& x, bool write, const char* what) {
+    if (x.defined()) return t(x, write, what);
+    bindings.push_back({});
+    push.push_back(0);
+    push.push_back(0);
+    return *this;
+  }
+  // A whole device array (graph arrays).
+  Launch& raw(const Storage& s) {
+    const Buffer* b = buffer_of(s);
+    bindings.push_back({b->buffer, 0, std::min<std::uint64_t>(std::max<std::uint64_t>(s.bytes, 4), b->size), false});
+    GATCORE_CHECK(bindings.back().range <= ctx().max_storage_range,
+                  "vulkan: a graph array exceeds maxStorageBufferRange");
+    return *this;
+  }
+  void run(const char* shader, std::uint64_t groups) {
+    if (groups == 0) return;
+    const std::uint32_t gx = static_cast<std::uint32_t>(std::min<std::uint64_t>(groups, 65535));
+    const std::uint32_t gy = static_cast<std::uint32_t>((groups + gx - 1) / gx);
+    dispatch(shader, bindings, push.data(), static_cast<std::uint32_t>(push.size() * 4), gx, gy, 1);
+  }
+  // One invocation per item.
+  void per_invocation(const char* shader, std::uint64_t items) {
+    const std::uint32_t wg = pipeline(shader).wg_size;
+    run(shader, (items + wg - 1) / wg);
+  }
+  // One subgroup per item.
+  void per_subgroup(const char* shader, std::uint64_t items) {
+    const std::uint32_t per_group = pipeline(shader).wg_size / ctx().subgroup_size;
+    run(shader, (items + per_group - 1) / per_group);
+  }
+};
+
+struct EwArg {
+  Tensor t;
+  bool write;
+  bool rowwise = true;  // sliced by row chunks (false: bound whole, e.g. a bias row)
+  const char* what = "tensor";
+};
+
+// An elementwise shader over [rows, cols] with header (rows, cols), one view per
+// argument, then `extra` words; rows are split into chunks whose spans fit
+// maxStorageBufferRange.
+void elementwise(const char* shader, std::int64_t rows, std::int64_t cols, const std::vector<EwArg>& args,
+                 const std::vector<std::uint32_t>& extra) {
+  if (rows == 0 || cols == 0) return;
+  const Context& c = ctx();
+  std::int64_t chunk = rows;
+  for (const EwArg& a : args) {
+    if (!a.rowwise || !a.t.defined()) continue;
+    const std::int64_t ld = std::max<std::int64_t>(a.t.ld(), 1);
+    const std::int64_t budget = static_cast<std::int64_t>(c.max_storage_range - c.storage_align) / 4 - cols;
+    GATCORE_CHECK(budget >= 0, "vulkan: a single row of ", a.what, " exceeds maxStorageBufferRange");
+    chunk = std::min(chunk, budget / ld + 1);
+  }
+  chunk = std::min<std::int64_t>(chunk, std::max<std::int64_t>(1, ((std::int64_t{1} << 31) - 1) / cols));
+  for (std::int64_t r0 = 0; r0 < rows; r0 += chunk) {
+    const std::int64_t r1 = std::min(rows, r0 + chunk);
+    Launch l;
+    l.u(r1 - r0).u(cols);
+    for (const EwArg& a : args) {
+      if (!a.t.defined()) l.opt(a.t, a.write, a.what);
+      else l.t(a.rowwise ? a.t.rows_slice(r0, r1) : a.t, a.write, a.what);
+    }
+    l.push.insert(l.push.end(), extra.begin(), extra.end());
+    l.per_invocation(shader, static_cast<std::uint64_t>((r1 - r0) * cols));
+  }
+}
+
+std::uint32_t fw(float v) { return std::bit_cast<std::uint32_t>(v); }
+
+void same(const Tensor& a, const Tensor& b, const char* op, const char* an, const char* bn) {
+  check_vk(a, an);
+  check_vk(b, bn);
+  GATCORE_CHECK(a.same_shape(b), op, ": ", an, " ", a.shape_str(), " and ", bn, " ", b.shape_str(),
+                " must have the same shape");
+}
+
+class VulkanBackend final : public Backend {
+ public:
+  Device device() const override { return Device::vulkan; }
+
+  Tensor empty(std::int64_t r, std::int64_t c, DType dt) override {
+    GATCORE_CHECK(r >= 0 && c >= 0, "vulkan empty: negative shape [", r, ", ", c, "]");
+    auto s = make_storage(static_cast<std::uint64_t>(r * c) * 4);
+    return Tensor::wrap(std::move(s), dt, 0, r, c, c);
+  }
+  Tensor zeros(std::int64_t r, std::int64_t c, DType dt) override {
+    Tensor t = empty(r, c, dt);
+    fill(t, 0.0f);
+    return t;
+  }
+  void fill(const Tensor& y, float v) override { elementwise("fill", y.rows(), y.cols(), {{y, true}}, {fw(v)}); }
+  void copy(const Tensor& src, const Tensor& dst) override {
+    same(src, dst, "copy", "src", "dst");
+    elementwise("copy", src.rows(), src.cols(), {{src, false}, {dst, true}}, {});
+  }
+  Tensor from_host(const Tensor& host) override {
+    GATCORE_CHECK(host.defined() && host.device() == Device::cpu, "vulkan from_host: expects a CPU tensor");
+    const Tensor h = host.contiguous() && host.offset() == 0 ? host : host.clone();
+    const std::uint64_t bytes = static_cast<std::uint64_t>(h.numel()) * 4;
+    auto s = upload(h.storage()->host, bytes);
+    return Tensor::wrap(std::move(s), h.dtype(), 0, h.rows(), h.cols(), h.cols());
+  }
+  Tensor to_host(const Tensor& t) override {
+    check_vk(t, "to_host");
+    Tensor out = Tensor::empty(t.rows(), t.cols(), t.dtype());
+    if (t.numel() == 0) return out;
+    const std::uint64_t span = static_cast<std::uint64_t>((t.rows() - 1) * t.ld() + t.cols());
+    if (t.contiguous()) {
+      download(*t.storage(), static_cast<std::uint64_t>(t.offset()) * 4, span * 4, out.storage()->host);
+    } else {
+      std::vector<float> tmp(span);
+      download(*t.storage(), static_cast<std::uint64_t>(t.offset()) * 4, span * 4, tmp.data());
+      char* o = static_cast<char*>(out.storage()->host);
+      for (std::int64_t r = 0; r < t.rows(); ++r)
+        std::memcpy(o + r * t.cols() * 4, tmp.data() + r * t.ld(), static_cast<std::size_t>(t.cols()) * 4);
+    }
+    return out;
+  }
+
+  void gemm(const Tensor& A, bool ta, const Tensor& B, bool tb, const Tensor& C, float alpha, float beta) override {
+    check_vk(A, "gemm: A");
+    check_vk(B, "gemm: B");
+    check_vk(C, "gemm: C");
+    const std::int64_t M = ta ? A.cols() : A.rows(), K = ta ? A.rows() : A.cols();
+    const std::int64_t K2 = tb ? B.cols() : B.rows(), N = tb ? B.rows() : B.cols();
+    GATCORE_CHECK(K == K2 && C.rows() == M && C.cols() == N, "gemm: op(A) [", M, ", ", K, "] x op(B) [", K2, ", ",
+                  N, "] into C ", C.shape_str());
+    if (M == 0 || N == 0) return;
+    Launch l;
+    l.u(M).u(N).u(K).t(A, false, "gemm: A").t(B, false, "gemm: B").t(C, true, "gemm: C");
+    l.u(ta).u(tb).f(alpha).f(beta);
+    const std::uint32_t gx = static_cast<std::uint32_t>((N + 63) / 64), gy = static_cast<std::uint32_t>((M + 63) / 64);
+    dispatch("gemm", l.bindings, l.push.data(), static_cast<std::uint32_t>(l.push.size() * 4), gx, gy, 1);
+  }
+  void add_row_bias(const Tensor& bias, const Tensor& y) override {
+    check_vk(bias, "add_row_bias: bias");
+    check_shape(bias, 1, y.cols(), "add_row_bias: bias");
+    elementwise("add_row_bias", y.rows(), y.cols(), {{bias, false, false, "bias"}, {y, true}}, {});
+  }
+  void column_sums_accumulate(const Tensor& d_y, const Tensor& d_bias) override {
+    check_vk(d_y, "column_sums_accumulate: d_y");
+    check_vk(d_bias, "column_sums_accumulate: d_bias");
+    check_shape(d_bias, 1, d_y.cols(), "column_sums_accumulate: d_bias");
+    Launch l;
+    l.u(d_y.rows()).u(d_y.cols()).t(d_y, false, "d_y").t(d_bias, true, "d_bias");
+    l.run("column_sums_accumulate", static_cast<std::uint64_t>(d_y.cols()));
+  }
+  void axpby(float a, const Tensor& x, float b, const Tensor& y, const Tensor& out) override {
+    same(x, out, "axpby", "a", "y");
+    same(y, out, "axpby", "b", "y");
+    elementwise("axpby", out.rows(), out.cols(), {{x, false}, {y, false}, {out, true}}, {fw(a), fw(b)});
+  }
+  void axpy(float a, const Tensor& x, const Tensor& y) override {
+    same(x, y, "axpy", "x", "y");
+    elementwise("axpy", y.rows(), y.cols(), {{x, false}, {y, true}}, {fw(a)});
+  }
+  void mul(const Tensor& a, const Tensor& b, const Tensor& y) override {
+    same(a, y, "mul", "a", "y");
+    same(b, y, "mul", "b", "y");
+    elementwise("mul", y.rows(), y.cols(), {{a, false}, {b, false}, {y, true}}, {});
+  }
+  void mul_accumulate(const Tensor& b, const Tensor& d_y, const Tensor& d_a) override {
+    if (!d_a.defined()) return;
+    same(b, d_a, "mul_accumulate", "b", "d_a");
+    same(d_y, d_a, "mul_accumulate", "d_y", "d_a");
+    elementwise("mul_accumulate", d_a.rows(), d_a.cols(), {{b, false}, {d_y, false}, {d_a, true}}, {});
+  }
+  void activation_forward(Activation f, const Tensor& x, const Tensor& y, float slope) override {
+    same(x, y, "activation_forward", "x", "y");
+    elementwise("activation_forward", x.rows(), x.cols(), {{x, false}, {y, true}},
+                {static_cast<std::uint32_t>(f), fw(slope)});
+  }
+  void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x,
+                           float slope) override {
+    check_vk(d_y, "activation_backward: d_y");
+    GATCORE_CHECK(f == Activation::identity || x.defined() || (y.defined() && f != Activation::tanhshrink),
+                  "activation_backward(", activation_name(f), "): x: tensor is undefined");
+    if (!d_x.defined()) return;
+    same(d_y, d_x, "activation_backward", "d_y", "d_x");
+    if (x.defined()) same(x, d_x, "activation_backward", "x", "d_x");
+    if (y.defined()) same(y, d_x, "activation_backward", "y", "d_x");
+    const bool use_y = y.defined() && (f == Activation::tanh || !x.defined());
+    elementwise("activation_backward", d_x.rows(), d_x.cols(),
+                {{x, false}, {use_y ? y : Tensor(), false}, {d_y, false}, {d_x, true}},
+                {static_cast<std::uint32_t>(f), fw(slope), x.defined() ? 1u : 0u, use_y ? 1u : 0u});
+  }
+  void row_softmax_forward(const Tensor& x, const Tensor& mask, const Tensor& y) override {
+    same(x, y, "row_softmax_forward", "x", "y");
+    if (mask.defined()) check_shape(mask, 1, x.cols(), "row_softmax_forward: mask");
+    Launch l;
+    l.u(x.rows()).u(x.cols()).t(x, false, "x").opt(mask, false, "mask").t(y, true, "y").u(mask.defined());
+    l.per_subgroup("row_softmax_forward", static_cast<std::uint64_t>(x.rows()));
+  }
+  void row_softmax_backward(const Tensor& y, const Tensor& d_y, const Tensor& d_x) override {
+    if (!d_x.defined()) return;
+    same(y, d_x, "row_softmax_backward", "y", "d_x");
+    same(d_y, d_x, "row_softmax_backward", "d_y", "d_x");
+    Launch l;
+    l.u(y.rows()).u(y.cols()).t(y, false, "y").t(d_y, false, "d_y").t(d_x, true, "d_x");
+    l.per_subgroup("row_softmax_backward", static_cast<std::uint64_t>(y.rows()));
+  }
+  void batchnorm_train_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps, float momentum,
+                               const Tensor& y, const Tensor& save_mean, const Tensor& save_invstd,
+                               const Tensor& running_mean, const Tensor& running_var) override {
+    same(x, y, "batchnorm_train_forward", "x", "y");
+    GATCORE_CHECK(x.rows() >= 2, "batchnorm_train_forward: needs at least 2 rows, got ", x.shape_str());
+    GATCORE_CHECK(eps >= 0.0f && std::isfinite(eps), "batchnorm_train_forward: eps must be finite and >= 0");
+    batchnorm_forward(0, x, gamma, beta, eps, momentum, y, save_mean, save_invstd, running_mean, running_var);
+  }
+  void batchnorm_eval_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, const Tensor& rm,
+                              const Tensor& rv, float eps, const Tensor& y) override {
+    same(x, y, "batchnorm_eval_forward", "x", "y");
+    check_shape(rm, 1, x.cols(), "batchnorm_eval_forward: running_mean");
+    check_shape(rv, 1, x.cols(), "batchnorm_eval_forward: running_var");
+    batchnorm_forward(1, x, gamma, beta, eps, 0.0f, y, Tensor(), Tensor(), rm, rv);
+  }
+  void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
+                                const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
+                                const Tensor& d_gamma, const Tensor& d_beta) override {
+    check_shape(save_mean, 1, x.cols(), "batchnorm_train_backward: save_mean");
+    check_shape(save_invstd, 1, x.cols(), "batchnorm_train_backward: save_invstd");
+    batchnorm_backward(0, x, gamma, save_mean, save_invstd, 0.0f, d_y, d_x, d_gamma, d_beta);
+  }
+  void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& rm, const Tensor& rv, float eps,
+                               const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma,
+                               const Tensor& d_beta) override {
+    check_shape(rm, 1, x.cols(), "batchnorm_eval_backward: running_mean");
+    check_shape(rv, 1, x.cols(), "batchnorm_eval_backward: running_var");
+    batchnorm_backward(1, x, gamma, rm, rv, eps, d_y, d_x, d_gamma, d_beta);
+  }
+
+  void sum_all(const Tensor& x, const Tensor& out) override {
+    check_vk(x, "sum_all: x");
+    check_shape(out, 1, 1, "sum_all: out");
+    Launch l;
+    l.u(x.rows()).u(x.cols()).t(x, false, "x").t(out, true, "out");
+    l.run("sum_all", 1);
+  }
+  void add_scalar_accumulate(const Tensor& s, float scale, const Tensor& d_x) override {
+    check_shape(s, 1, 1, "add_scalar_accumulate: s");
+    check_vk(d_x, "add_scalar_accumulate: d_x");
+    elementwise("add_scalar_accumulate", d_x.rows(), d_x.cols(), {{s, false, false, "s"}, {d_x, true}}, {fw(scale)});
+  }
+  void mse_forward(const Tensor& pred, const Tensor& target, const Tensor& out) override {
+    same(pred, target, "mse_forward", "pred", "target");
+    check_shape(out, 1, 1, "mse_forward: out");
+    Launch l;
+    l.u(pred.rows()).u(pred.cols()).t(pred, false, "pred").t(target, false, "target").t(out, true, "out");
+    l.run("mse_forward", 1);
+  }
+  void mse_backward(const Tensor& pred, const Tensor& target, const Tensor& d_out, const Tensor& d_pred) override {
+    if (!d_pred.defined()) return;
+    same(pred, target, "mse_backward", "pred", "target");
+    same(pred, d_pred, "mse_backward", "pred", "d_pred");
+    check_shape(d_out, 1, 1, "mse_backward: d_out");
+    const float inv_n = pred.numel() ? 1.0f / static_cast<float>(pred.numel()) : 0.0f;
+    elementwise("mse_backward", pred.rows(), pred.cols(),
+                {{pred, false}, {target, false}, {d_out, false, false, "d_out"}, {d_pred, true}}, {fw(inv_n)});
+  }
+  void kl_div_forward(const Tensor& pred, const Tensor& target, float eps, const Tensor& out) override {
+    same(pred, target, "kl_div_forward", "pred", "target");
+    check_shape(out, 1, 1, "kl_div_forward: out");
+    GATCORE_CHECK(eps > 0.0f && std::isfinite(eps), "kl_div_forward: eps: must be finite and > 0, got ", eps);
+    Launch l;
+    l.u(pred.rows()).u(pred.cols()).t(pred, false, "pred").t(target, false, "target").t(out, true, "out").f(eps);
+    l.run("kl_div_forward", 1);
+  }
+  void kl_div_backward(const Tensor& pred, const Tensor& target, float eps, const Tensor& d_out,
+                       const Tensor& d_pred) override {
+    if (!d_pred.defined()) return;
+    same(pred, target, "kl_div_backward", "pred", "target");
+    same(pred, d_pred, "kl_div_backward", "pred", "d_pred");
+    check_shape(d_out, 1, 1, "kl_div_backward: d_out");
+    GATCORE_CHECK(eps > 0.0f && std::isfinite(eps), "kl_div_backward: eps: must be finite and > 0, got ", eps);
+    const float inv_rows = pred.rows() ? 1.0f / static_cast<float>(pred.rows()) : 0.0f;
+    elementwise("kl_div_backward", pred.rows(), pred.cols(),
+                {{pred, false}, {target, false}, {d_out, false, false, "d_out"}, {d_pred, true}},
+                {fw(eps), fw(inv_rows)});
+  }
+
+  void adam_update(const Tensor& param, const Tensor& grad, const Tensor& m, const Tensor& v, float lr, float beta1,
+                   float beta2, float eps, float weight_decay, long step) override {
+    same(param, grad, "adam_update", "param", "grad");
+    same(param, m, "adam_update", "param", "m");
+    same(param, v, "adam_update", "param", "v");
+    GATCORE_CHECK(step >= 1, "adam_update: step must be >= 1, got ", step);
+    const float c1 = 1.0f / (1.0f - std::pow(beta1, static_cast<float>(step)));
+    const float c2 = 1.0f / (1.0f - std::pow(beta2, static_cast<float>(step)));
+    elementwise("adam_update", param.rows(), param.cols(), {{param, true}, {grad, false}, {m, true}, {v, true}},
+                {fw(lr), fw(beta1), fw(beta2), fw(eps), fw(weight_decay), fw(c1), fw(c2)});
+  }
+
+  void attention_projection_forward(const Tensor& z, const Tensor& a_l, const Tensor& a_r, const Tensor& el,
+                                    const Tensor& er) override {
+    check_vk(z, "attention_projection_forward: z");
+    check_vk(a_l, "attention_projection_forward: a_l");
+    const std::int64_t H = a_l.rows(), F = a_l.cols(), n = z.rows();
+    check_shape(a_r, H, F, "attention_projection_forward: a_r");
+    check_shape(z, n, H * F, "attention_projection_forward: z");
+    check_shape(el, n, H, "attention_projection_forward: el");
+    check_shape(er, n, H, "attention_projection_forward: er");
+    Launch l;
+    l.u(n).u(H).u(F).t(z, false, "z").t(a_l, false, "a_l").t(a_r, false, "a_r").t(el, true, "el").t(er, true, "er");
+    l.per_subgroup("attention_projection_forward", static_cast<std::uint64_t>(n * H));
+  }
+  void attention_projection_backward(const Tensor& z, const Tensor& a_l, const Tensor& a_r, const Tensor& d_el,
+                                     const Tensor& d_er, const Tensor& d_z, const Tensor& d_al,
+                                     const Tensor& d_ar) override {
+    check_vk(z, "attention_projection_backward: z");
+    const std::int64_t H = a_l.rows(), F = a_l.cols(), n = z.rows();
+    check_shape(a_r, H, F, "attention_projection_backward: a_r");
+    check_shape(d_el, n, H, "attention_projection_backward: d_el");
+    check_shape(d_er, n, H, "attention_projection_backward: d_er");
+    if (d_z.defined()) {
+      check_shape(d_z, n, H * F, "attention_projection_backward: d_z");
+      Launch l;
+      l.u(n).u(H).u(F).t(d_el, false, "d_el").t(d_er, false, "d_er").t(a_l, false, "a_l").t(a_r, false, "a_r");
+      l.t(d_z, true, "d_z");
+      l.per_invocation("attention_projection_backward_z", static_cast<std::uint64_t>(n * H * F));
+    }
+    if (d_al.defined() || d_ar.defined()) {
+      if (d_al.defined()) check_shape(d_al, H, F, "attention_projection_backward: d_al");
+      if (d_ar.defined()) check_shape(d_ar, H, F, "attention_projection_backward: d_ar");
+      Launch l;
+      l.u(n).u(H).u(F).t(z, false, "z").t(d_el, false, "d_el").t(d_er, false, "d_er");
+      l.opt(d_al, true, "d_al").opt(d_ar, true, "d_ar").u(d_al.defined()).u(d_ar.defined());
+      l.run("attention_projection_backward_a", static_cast<std::uint64_t>(H * F));
+    }
+  }
+  void edge_softmax_additive_forward(const CsrGraph& g, const Tensor& el, const Tensor& er, float slope,
+                                     const Tensor& alpha) override {
+    const std::int64_t n = g.num_nodes, H = el.cols();
+    check_vk(el, "edge_softmax_additive_forward: el");
+    check_shape(el, n, H, "edge_softmax_additive_forward: el");
+    check_shape(er, n, H, "edge_softmax_additive_forward: er");
+    check_shape(alpha, g.num_edges(), H, "edge_softmax_additive_forward: alpha");
+    const DeviceGraph& dg = device_graph(g);
+    Launch l;
+    l.u(n).u(H).t(el, false, "el").t(er, false, "er").t(alpha, true, "alpha").raw(*dg.indptr).raw(*dg.indices);
+    l.f(slope);
+    l.per_invocation("edge_softmax_additive_forward", static_cast<std::uint64_t>(n * H));
+  }
+  void edge_softmax_dot_forward(const CsrGraph& g, const Tensor& h, int heads, float scale,
+                                const Tensor& alpha) override {
+    const std::int64_t n = g.num_nodes, H = heads;
+    check_vk(h, "edge_softmax_dot_forward: h");
+    GATCORE_CHECK(H > 0 && h.cols() % H == 0, "edge_softmax_dot_forward: h ", h.shape_str(), " is not ", H,
+                  " heads");
+    check_shape(h, n, -1, "edge_softmax_dot_forward: h");
+    check_shape(alpha, g.num_edges(), H, "edge_softmax_dot_forward: alpha");
+    const DeviceGraph& dg = device_graph(g);
+    Launch l;
+    l.u(n).u(H).u(h.cols() / H).t(h, false, "h").t(alpha, true, "alpha").raw(*dg.indptr).raw(*dg.indices);
+    l.f(scale);
+    l.per_subgroup("edge_softmax_dot_forward", static_cast<std::uint64_t>(n * H));
+  }
+  void edge_softmax_additive_backward(const CsrGraph& g, const Tensor& el, const Tensor& er, float slope,
+                                      const Tensor& alpha, const Tensor& d_alpha, const Tensor& d_el,
+                                      const Tensor& d_er) override {
+    const std::int64_t n = g.num_nodes, H = el.cols(), E = g.num_edges();
+    check_shape(el, n, H, "edge_softmax_additive_backward: el");
+    check_shape(er, n, H, "edge_softmax_additive_backward: er");
+    check_shape(alpha, E, H, "edge_softmax_additive_backward: alpha");
+    check_shape(d_alpha, E, H, "edge_softmax_additive_backward: d_alpha");
+    if (!d_el.defined() && !d_er.defined()) return;
+    if (d_el.defined()) check_shape(d_el, n, H, "edge_softmax_additive_backward: d_el");
+    if (d_er.defined()) check_shape(d_er, n, H, "edge_softmax_additive_backward: d_er");
+    const DeviceGraph& dg = device_graph(g);
+    Tensor gs = empty(E, H, DType::f32);
+    {
+      Launch l;
+      l.u(n).u(H).t(el, false, "el").t(er, false, "er").t(alpha, false, "alpha").t(d_alpha, false, "d_alpha");
+      l.opt(d_el, true, "d_el").t(gs, true, "scratch").raw(*dg.indptr).raw(*dg.indices).f(slope).u(d_el.defined());
+      l.per_invocation("edge_softmax_additive_backward", static_cast<std::uint64_t>(n * H));
+    }
+    if (d_er.defined()) gather_transpose(dg, gs, d_er);
+  }
+  void edge_softmax_dot_backward(const CsrGraph& g, const Tensor& h, int heads, float scale, const Tensor& alpha,
+                                 const Tensor& d_alpha, const Tensor& d_h) override {
+    const std::int64_t n = g.num_nodes, H = heads, E = g.num_edges();
+    check_vk(h, "edge_softmax_dot_backward: h");
+    GATCORE_CHECK(H > 0 && h.cols() % H == 0, "edge_softmax_dot_backward: h ", h.shape_str(), " is not ", H,
+                  " heads");
+    check_shape(alpha, E, H, "edge_softmax_dot_backward: alpha");
+    check_shape(d_alpha, E, H, "edge_softmax_dot_backward: d_alpha");
+    if (!d_h.defined()) return;
+    check_shape(d_h, n, h.cols(), "edge_softmax_dot_backward: d_h");
+    const DeviceGraph& dg = device_graph(g);
+    Tensor gs = empty(E, H, DType::f32);
+    {
+      Launch l;
+      l.u(n).u(H).t(alpha, false, "alpha").t(d_alpha, false, "d_alpha").t(gs, true, "scratch").raw(*dg.indptr);
+      l.f(scale);
+      l.per_invocation("edge_softmax_dot_backward", static_cast<std::uint64_t>(n * H));
+    }
+    Launch l;
+    l.u(n).u(H).u(h.cols() / H).t(h, false, "h").t(gs, false, "scratch").t(d_h, true, "d_h");
+    l.raw(*dg.indptr).raw(*dg.indices).raw(*dg.out_ptr).raw(*dg.out_dst).raw(*dg.out_edge);
+    l.per_invocation("edge_softmax_dot_backward_h", static_cast<std::uint64_t>(n * h.cols()));
+  }
+  void aggregate_forward(const CsrGraph& g, const Tensor& alpha, const Tensor& z, const Tensor& out) override {
+    const std::int64_t n = g.num_nodes, H = alpha.cols();
+    check_vk(z, "aggregate_forward: z");
+    check_shape(alpha, g.num_edges(), -1, "aggregate_forward: alpha");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "aggregate_forward: z ", z.shape_str(), " is not ", H, " heads");
+    check_shape(z, n, -1, "aggregate_forward: z");
+    check_shape(out, n, z.cols(), "aggregate_forward: out");
+    const DeviceGraph& dg = device_graph(g);
+    Launch l;
+    l.u(n).u(H).u(z.cols() / H).t(alpha, false, "alpha").t(z, false, "z").t(out, true, "out");
+    l.raw(*dg.indptr).raw(*dg.indices);
+    l.per_invocation("aggregate_forward", static_cast<std::uint64_t>(n * z.cols()));
+  }
+  void aggregate_backward(const CsrGraph& g, const Tensor& alpha, const Tensor& z, const Tensor& d_out,
+                          const Tensor& d_alpha, const Tensor& d_z) override {
+    const std::int64_t n = g.num_nodes, H = alpha.cols();
+    check_vk(z, "aggregate_backward: z");
+    check_shape(alpha, g.num_edges(), -1, "aggregate_backward: alpha");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "aggregate_backward: z ", z.shape_str(), " is not ", H, " heads");
+    check_shape(d_out, n, z.cols(), "aggregate_backward: d_out");
+    const DeviceGraph& dg = device_graph(g);
+    const std::int64_t F = z.cols() / H;
+    if (d_alpha.defined()) {
+      check_shape(d_alpha, g.num_edges(), H, "aggregate_backward: d_alpha");
+      Launch l;
+      l.u(n).u(H).u(F).t(d_out, false, "d_out").t(z, false, "z").t(d_alpha, true, "d_alpha");
+      l.raw(*dg.indptr).raw(*dg.indices);
+      l.per_subgroup("aggregate_backward_alpha", static_cast<std::uint64_t>(n * H));
+    }
+    if (d_z.defined()) {
+      check_shape(d_z, n, z.cols(), "aggregate_backward: d_z");
+      Launch l;
+      l.u(n).u(H).u(F).t(alpha, false, "alpha").t(d_out, false, "d_out").t(d_z, true, "d_z");
+      l.raw(*dg.out_ptr).raw(*dg.out_dst).raw(*dg.out_edge);
+      l.per_invocation("aggregate_backward_z", static_cast<std::uint64_t>(n * z.cols()));
+    }
+  }
+  // The fused ops run as their unfused shaders (identical results by the
+  // kernels' definition); d_alpha of the backward lives in a cached scratch.
+  void gat_fused_additive_forward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
+                                  float slope, const Tensor& out, const Tensor& alpha) override {
+    edge_softmax_additive_forward(g, el, er, slope, alpha);
+    aggregate_forward(g, alpha, z, out);
+  }
+  void gat_fused_dot_forward(const CsrGraph& g, const Tensor& z, int heads, float scale, const Tensor& out,
+                             const Tensor& alpha) override {
+    edge_softmax_dot_forward(g, z, heads, scale, alpha);
+    aggregate_forward(g, alpha, z, out);
+  }
+  void gat_fused_additive_backward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
+                                   float slope, const Tensor& alpha, const Tensor& d_out, const Tensor& d_z,
+                                   const Tensor& d_el, const Tensor& d_er) override {
+    Tensor d_alpha = empty(alpha.rows(), alpha.cols(), DType::f32);
+    aggregate_backward(g, alpha, z, d_out, d_alpha, d_z);
+    edge_softmax_additive_backward(g, el, er, slope, alpha, d_alpha, d_el, d_er);
+  }
+  void gat_fused_dot_backward(const CsrGraph& g, const Tensor& z, int heads, float scale, const Tensor& alpha,
+                              const Tensor& d_out, const Tensor& d_z) override {
+    Tensor d_alpha = empty(alpha.rows(), alpha.cols(), DType::f32);
+    aggregate_backward(g, alpha, z, d_out, d_alpha, d_z);
+    edge_softmax_dot_backward(g, z, heads, scale, alpha, d_alpha, d_z);
+  }
+
+  void segment_max_forward(const Tensor&, std::span<const std::int64_t>, const Tensor&, const Tensor&) override {
+    not_implemented("segment_max_forward");
+  }
+  void segment_max_backward(const Tensor&, const Tensor&, const Tensor&) override {
+    not_implemented("segment_max_backward");
+  }
+  void broadcast_segments_forward(const Tensor&, std::span<const std::int64_t>, const Tensor&) override {
+    not_implemented("broadcast_segments_forward");
+  }
+  void broadcast_segments_backward(const Tensor&, std::span<const std::int64_t>, const Tensor&) override {
+    not_implemented("broadcast_segments_backward");
+  }
+  void neighbour_mean_forward(const CsrGraph&, const Tensor&, const Tensor&) override {
+    not_implemented("neighbour_mean_forward");
+  }
+  void neighbour_mean_backward(const CsrGraph&, const Tensor&, const Tensor&) override {
+    not_implemented("neighbour_mean_backward");
+  }
+
+ private:
+  void batchnorm_forward(std::uint32_t mode, const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
+                         float momentum, const Tensor& y, const Tensor& smean, const Tensor& sinv, const Tensor& rm,
+                         const Tensor& rv) {
+    const std::int64_t C = x.cols();
+    for (const Tensor* t : {&gamma, &beta, &smean, &sinv, &rm, &rv})
+      if (t->defined()) check_shape(*t, 1, C, "batchnorm: per-column parameter");
+    if (x.rows() == 0 || C == 0) return;
+    Launch l;
+    l.u(x.rows()).u(C).t(x, false, "x").opt(gamma, false, "gamma").opt(beta, false, "beta").t(y, true, "y");
+    l.opt(smean, true, "save_mean").opt(sinv, true, "save_invstd").opt(rm, mode == 0, "running_mean");
+    l.opt(rv, mode == 0, "running_var").u(mode).f(eps).f(momentum);
+    for (const Tensor* t : {&gamma, &beta, &smean, &sinv, &rm, &rv}) l.u(t->defined());
+    l.run("batchnorm_forward", static_cast<std::uint64_t>(C));
+  }
+  void batchnorm_backward(std::uint32_t mode, const Tensor& x, const Tensor& gamma, const Tensor& mean,
+                          const Tensor& stat, float eps, const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma,
+                          const Tensor& d_beta) {
+    check_vk(x, "batchnorm backward: x");
+    const std::int64_t C = x.cols();
+    same(x, d_y, "batchnorm backward", "x", "d_y");
+    if (d_x.defined()) same(x, d_x, "batchnorm backward", "x", "d_x");
+    if (gamma.defined()) check_shape(gamma, 1, C, "batchnorm backward: gamma");
+    if (d_gamma.defined()) check_shape(d_gamma, 1, C, "batchnorm backward: d_gamma");
+    if (d_beta.defined()) check_shape(d_beta, 1, C, "batchnorm backward: d_beta");
+    if ((!d_x.defined() && !d_gamma.defined() && !d_beta.defined()) || x.rows() == 0 || C == 0) return;
+    Launch l;
+    l.u(x.rows()).u(C).t(x, false, "x").opt(gamma, false, "gamma").t(mean, false, "mean").t(stat, false, "stat");
+    l.t(d_y, false, "d_y").opt(d_x, true, "d_x").opt(d_gamma, true, "d_gamma").opt(d_beta, true, "d_beta");
+    l.u(mode).f(eps).u(gamma.defined()).u(d_x.defined()).u(d_gamma.defined()).u(d_beta.defined());
+    l.run("batchnorm_backward", static_cast<std::uint64_t>(C));
+  }
+
+  // d_x[j,k] += Σ over edges e leaving j of gs[e,k].
+  void gather_transpose(const DeviceGraph& dg, const Tensor& gs, const Tensor& d_x) {
+    Launch l;
+    l.u(dg.num_nodes).u(d_x.cols()).t(gs, false, "scratch").t(d_x, true, "d_x").raw(*dg.out_ptr).raw(*dg.out_edge);
+    l.per_invocation("edge_softmax_backward_gather", static_cast<std::uint64_t>(dg.num_nodes * d_x.cols()));
+  }
+};
+
+VulkanBackend g_backend;
+
+}  // namespace
+
+Backend* backend_instance() { return &g_backend; }
+
+}  // namespace gatcore::vk
