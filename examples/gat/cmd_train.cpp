@@ -24,7 +24,12 @@ using namespace gatcore::models;
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
-void on_sigint(int) { g_stop = g_stop + 1; }
+// First Ctrl-C: finish the epoch, write its checkpoint, stop. Second: quit
+// now (the last complete checkpoint is intact: writes are atomic).
+void on_sigint(int) {
+  if (g_stop) std::_Exit(130);
+  g_stop = 1;
+}
 
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
@@ -145,8 +150,9 @@ int gat::cmd_train(int argc, char** argv) {
     std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
     return 0;
   }
-  std::signal(SIGINT, on_sigint);
   const bool tty = isatty(fileno(stderr));
+  std::signal(SIGINT, on_sigint);
+  if (tty) std::fprintf(stderr, "(Ctrl-C stops after the current epoch's checkpoint; twice quits at once)\n");
   const auto t0 = std::chrono::steady_clock::now();
   const int first = trainer.epoch();
   while (trainer.epoch() < epochs) {
@@ -173,6 +179,7 @@ int gat::cmd_train(int argc, char** argv) {
                 out.c_str());
     std::fflush(stdout);
     if (g_stop) {
+      std::signal(SIGINT, SIG_DFL);
       std::printf("interrupted: stopped after epoch %d; resume with --resume %s\n", st.epoch, out.c_str());
       return 130;
     }
