@@ -24,16 +24,23 @@ using namespace gatcore::models;
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
-void on_sigint(int) { g_stop = g_stop + 1; }
+// First Ctrl-C: finish the epoch, write its checkpoint, stop. Second: quit
+// now (the last complete checkpoint is intact: writes are atomic).
+void on_sigint(int) {
+  if (g_stop) std::_Exit(130);
+  g_stop = 1;
+}
 
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
-               "usage: gat train [--model NAME] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
+               "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
                "                 neuroskinning, neuroskinning-nopool, fc, pointnet; paper settings\n"
+               "  --task T       weights or displacement (default: the model's paper task; e.g.\n"
+               "                 --model neuroskinning --task displacement is DenseGATs' comparison)\n"
                "  --out FILE     checkpoint path (default model.gcm)\n"
                "  --epochs N     epochs to train, in total when resuming (default 10)\n"
                "  --resume FILE  continue from a checkpoint written by gat train (model, data, seed\n"
@@ -71,7 +78,7 @@ std::string hms(double s) {
 }  // namespace
 
 int gat::cmd_train(int argc, char** argv) {
-  std::string model_name = "densegats", out = "model.gcm", resume, data;
+  std::string model_name = "densegats", out = "model.gcm", resume, data, task;
   long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
   float lr = 1e-3f;
   for (int i = 1; i < argc; ++i) {
@@ -82,6 +89,13 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--out") && v) out = argv[++i];
     else if (!std::strcmp(a, "--resume") && v) resume = argv[++i];
     else if (!std::strcmp(a, "--data") && v) data = argv[++i];
+    else if (!std::strcmp(a, "--task") && v) {
+      task = argv[++i];
+      if (task != "weights" && task != "displacement") {
+        std::fprintf(stderr, "gat train: --task expects 'weights' or 'displacement', got '%s'\n", task.c_str());
+        return 2;
+      }
+    }
     else if (!std::strcmp(a, "--epochs") && v) { if (!parse_long(a, argv[++i], 1, 10000000, epochs)) return 2; }
     else if (!std::strcmp(a, "--seed") && v) { if (!parse_long(a, argv[++i], 0, 2147483647L, seed)) return 2; }
     else if (!std::strcmp(a, "--threads") && v) { if (!parse_long(a, argv[++i], 1, 1024, threads)) return 2; }
@@ -122,9 +136,10 @@ int gat::cmd_train(int argc, char** argv) {
       batch = std::stol(md.at("batch"));
     }
   } else {
-    const bool weights = ModelConfig::defaults(model_name, 1).task == Task::weights;
-    model = make_model(ModelConfig::defaults(model_name, demo::kTubeFeatures, weights ? demo::kTubeBones : 3),
-                       std::uint64_t(seed));
+    ModelConfig cfg = ModelConfig::defaults(model_name, demo::kTubeFeatures);
+    if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
+    cfg.out_dim = cfg.task == Task::weights ? demo::kTubeBones : 3;
+    model = make_model(cfg, std::uint64_t(seed));
   }
   const ModelConfig& cfg = model->config();
   const auto train = demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed) * 2 + 1);
@@ -145,8 +160,9 @@ int gat::cmd_train(int argc, char** argv) {
     std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
     return 0;
   }
-  std::signal(SIGINT, on_sigint);
   const bool tty = isatty(fileno(stderr));
+  std::signal(SIGINT, on_sigint);
+  if (tty) std::fprintf(stderr, "(Ctrl-C stops after the current epoch's checkpoint; twice quits at once)\n");
   const auto t0 = std::chrono::steady_clock::now();
   const int first = trainer.epoch();
   while (trainer.epoch() < epochs) {
@@ -173,6 +189,7 @@ int gat::cmd_train(int argc, char** argv) {
                 out.c_str());
     std::fflush(stdout);
     if (g_stop) {
+      std::signal(SIGINT, SIG_DFL);
       std::printf("interrupted: stopped after epoch %d; resume with --resume %s\n", st.epoch, out.c_str());
       return 130;
     }
