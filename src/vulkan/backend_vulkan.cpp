@@ -503,17 +503,40 @@ class VulkanBackend final : public Backend {
       l.per_invocation("aggregate_backward_z", static_cast<std::uint64_t>(n * z.cols()));
     }
   }
-  // The fused ops run as their unfused shaders (identical results by the
-  // kernels' definition); d_alpha of the backward lives in a cached scratch.
+  // Fused forwards: one shader each (logits + softmax + aggregation per
+  // destination row, only alpha stored). The fused backwards run the
+  // aggregation and edge-softmax backward shaders with d_alpha in a cached
+  // scratch [E, H] (results identical by the kernels' definition).
   void gat_fused_additive_forward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
                                   float slope, const Tensor& out, const Tensor& alpha) override {
-    edge_softmax_additive_forward(g, el, er, slope, alpha);
-    aggregate_forward(g, alpha, z, out);
+    const std::int64_t n = g.num_nodes, H = el.cols();
+    check_vk(z, "gat_fused_additive_forward: z");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "gat_fused_additive_forward: z ", z.shape_str(), " is not ", H,
+                  " heads");
+    check_shape(z, n, -1, "gat_fused_additive_forward: z");
+    check_shape(el, n, H, "gat_fused_additive_forward: el");
+    check_shape(er, n, H, "gat_fused_additive_forward: er");
+    check_shape(out, n, z.cols(), "gat_fused_additive_forward: out");
+    check_shape(alpha, g.num_edges(), H, "gat_fused_additive_forward: alpha");
+    const DeviceGraph& dg = device_graph(g);
+    Launch l;
+    l.u(n).u(H).u(z.cols() / H).t(z, false, "z").t(el, false, "el").t(er, false, "er").t(out, true, "out");
+    l.t(alpha, true, "alpha").raw(*dg.indptr).raw(*dg.indices).f(slope);
+    l.per_subgroup("gat_fused_additive_forward", static_cast<std::uint64_t>(n * H));
   }
   void gat_fused_dot_forward(const CsrGraph& g, const Tensor& z, int heads, float scale, const Tensor& out,
                              const Tensor& alpha) override {
-    edge_softmax_dot_forward(g, z, heads, scale, alpha);
-    aggregate_forward(g, alpha, z, out);
+    const std::int64_t n = g.num_nodes, H = heads;
+    check_vk(z, "gat_fused_dot_forward: z");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "gat_fused_dot_forward: z ", z.shape_str(), " is not ", H, " heads");
+    check_shape(z, n, -1, "gat_fused_dot_forward: z");
+    check_shape(out, n, z.cols(), "gat_fused_dot_forward: out");
+    check_shape(alpha, g.num_edges(), H, "gat_fused_dot_forward: alpha");
+    const DeviceGraph& dg = device_graph(g);
+    Launch l;
+    l.u(n).u(H).u(z.cols() / H).t(z, false, "z").t(out, true, "out").t(alpha, true, "alpha");
+    l.raw(*dg.indptr).raw(*dg.indices).f(scale);
+    l.per_subgroup("gat_fused_dot_forward", static_cast<std::uint64_t>(n * H));
   }
   void gat_fused_additive_backward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
                                    float slope, const Tensor& alpha, const Tensor& d_out, const Tensor& d_z,
