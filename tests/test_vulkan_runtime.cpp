@@ -28,6 +28,13 @@ TEST_CASE("vulkan: ops are batched into one submission per host read", "[vulkan]
   double expect = 0;
   for (float v : a.to_vector()) expect += 25.0 * v;
   REQUIRE(total == Approx(expect).epsilon(1e-4).margin(1e-3));
+  // A batch is cut (submitted) after 8192 dispatches without a host read.
+  vulkan::sync();
+  const auto s0 = vulkan::stats();
+  for (int k = 0; k < 8200; ++k) be.axpy(1e-3f, x, y);
+  REQUIRE(vulkan::stats().submits == s0.submits + 1);
+  vulkan::sync();
+  REQUIRE(vulkan::stats().submits == s0.submits + 2);
   // Device tensors are not host-addressable.
   REQUIRE_THROWS_WITH(y.data(), Catch::Contains("not host-addressable"));
 }
