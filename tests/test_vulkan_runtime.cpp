@@ -35,6 +35,11 @@ TEST_CASE("vulkan: ops are batched into one submission per host read", "[vulkan]
   REQUIRE(vulkan::stats().submits == s0.submits + 1);
   vulkan::sync();
   REQUIRE(vulkan::stats().submits == s0.submits + 2);
+  // clone() of a device tensor stays on the device (also of a strided view).
+  Tensor c = y.cols_slice(3, 9).clone();
+  REQUIRE(c.device() == Device::vulkan);
+  REQUIRE(c.contiguous());
+  vkt::require_close(H(y).cols_slice(3, 9).clone(), c, 0, 0, "clone");
   // Device tensors are not host-addressable.
   REQUIRE_THROWS_WITH(y.data(), Catch::Contains("not host-addressable"));
 }
