@@ -11,7 +11,8 @@
 layout(push_constant) uniform Push { uint n; uint H; uint F; VIEW(z); VIEW(o); VIEW(alpha); float scale; } pc;
 BUF(0, z);
 BUF(1, o);
-BUF(2, alpha);
+// coherent: the first lane parks the logits here for the whole subgroup.
+layout(std430, set = 0, binding = 2) coherent buffer Buf2 { ELEM alpha[]; };
 IBUF(3, indptr);
 IBUF(4, indices);
 void main() {

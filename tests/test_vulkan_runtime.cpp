@@ -74,6 +74,11 @@ TEST_CASE("vulkan: clear errors for a missing device and out of memory", "[vulka
   if (!vkt::ready()) return;
   REQUIRE_THROWS_WITH(vulkan::init("no-such-vulkan-device"), Catch::Contains("no Vulkan device matches"));
   REQUIRE_THROWS_WITH(vulkan::init("99"), Catch::Contains("out of range"));
+  // Selecting the current device again, by index or by name, is a no-op.
+  const auto cur = vulkan::current_device();
+  REQUIRE_NOTHROW(vulkan::init(std::to_string(cur.index)));
+  if (cur.index == 0) REQUIRE_NOTHROW(vulkan::init(cur.name));
+  REQUIRE(vulkan::select(std::to_string(cur.index)) == Device::vulkan);
   Backend& be = backend(Device::vulkan);
   REQUIRE_THROWS_WITH(be.empty(std::int64_t{1} << 21, std::int64_t{1} << 20, DType::f32),
                       Catch::Contains("out of device memory"));
