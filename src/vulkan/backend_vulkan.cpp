@@ -461,10 +461,7 @@ class VulkanBackend final : public Backend {
       l.f(scale);
       l.per_invocation("edge_softmax_dot_backward", static_cast<std::uint64_t>(n * H));
     }
-    Launch l;
-    l.u(n).u(H).u(h.cols() / H).t(h, false, "h").t(gs, false, "scratch").t(d_h, true, "d_h");
-    l.raw(*dg.indptr).raw(*dg.indices).raw(*dg.out_ptr).raw(*dg.out_dst).raw(*dg.out_edge);
-    l.per_invocation("edge_softmax_dot_backward_h", static_cast<std::uint64_t>(n * h.cols()));
+    logit_gradient_to_h(dg, h, H, gs, d_h);
   }
   void aggregate_forward(const CsrGraph& g, const Tensor& alpha, const Tensor& z, const Tensor& out) override {
     const std::int64_t n = g.num_nodes, H = alpha.cols();
@@ -503,10 +500,10 @@ class VulkanBackend final : public Backend {
       l.per_invocation("aggregate_backward_z", static_cast<std::uint64_t>(n * z.cols()));
     }
   }
-  // Fused forwards: one shader each (logits + softmax + aggregation per
-  // destination row, only alpha stored). The fused backwards run the
-  // aggregation and edge-softmax backward shaders with d_alpha in a cached
-  // scratch [E, H] (results identical by the kernels' definition).
+  // Fused ops: one row shader each (forward: logits + softmax + aggregation,
+  // only alpha stored; backward: d_alpha formed on the fly, the logit
+  // gradient left in a cached scratch [E, H] for the transpose gathers), plus
+  // the gathers shared with the unfused backwards.
   void gat_fused_additive_forward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
                                   float slope, const Tensor& out, const Tensor& alpha) override {
     const std::int64_t n = g.num_nodes, H = el.cols();
@@ -541,15 +538,47 @@ class VulkanBackend final : public Backend {
   void gat_fused_additive_backward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
                                    float slope, const Tensor& alpha, const Tensor& d_out, const Tensor& d_z,
                                    const Tensor& d_el, const Tensor& d_er) override {
-    Tensor d_alpha = empty(alpha.rows(), alpha.cols(), DType::f32);
-    aggregate_backward(g, alpha, z, d_out, d_alpha, d_z);
-    edge_softmax_additive_backward(g, el, er, slope, alpha, d_alpha, d_el, d_er);
+    const std::int64_t n = g.num_nodes, H = alpha.cols(), E = g.num_edges();
+    check_vk(z, "gat_fused_additive_backward: z");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "gat_fused_additive_backward: z ", z.shape_str(), " is not ", H,
+                  " heads");
+    check_shape(z, n, -1, "gat_fused_additive_backward: z");
+    check_shape(alpha, E, H, "gat_fused_additive_backward: alpha");
+    check_shape(el, n, H, "gat_fused_additive_backward: el");
+    check_shape(er, n, H, "gat_fused_additive_backward: er");
+    check_shape(d_out, n, z.cols(), "gat_fused_additive_backward: d_out");
+    if (d_el.defined()) check_shape(d_el, n, H, "gat_fused_additive_backward: d_el");
+    if (d_er.defined()) check_shape(d_er, n, H, "gat_fused_additive_backward: d_er");
+    if (d_el.defined() || d_er.defined()) {
+      const DeviceGraph& dg = device_graph(g);
+      Tensor gs = empty(E, H, DType::f32);
+      Launch l;
+      l.u(n).u(H).u(z.cols() / H).t(z, false, "z").t(el, false, "el").t(er, false, "er").t(alpha, false, "alpha");
+      l.t(d_out, false, "d_out").opt(d_el, true, "d_el").t(gs, true, "scratch").raw(*dg.indptr).raw(*dg.indices);
+      l.f(slope).u(d_el.defined());
+      l.per_subgroup("gat_fused_additive_backward", static_cast<std::uint64_t>(n * H));
+      if (d_er.defined()) gather_transpose(dg, gs, d_er);
+    }
+    if (d_z.defined()) aggregate_backward(g, alpha, z, d_out, Tensor(), d_z);
   }
   void gat_fused_dot_backward(const CsrGraph& g, const Tensor& z, int heads, float scale, const Tensor& alpha,
                               const Tensor& d_out, const Tensor& d_z) override {
-    Tensor d_alpha = empty(alpha.rows(), alpha.cols(), DType::f32);
-    aggregate_backward(g, alpha, z, d_out, d_alpha, d_z);
-    edge_softmax_dot_backward(g, z, heads, scale, alpha, d_alpha, d_z);
+    const std::int64_t n = g.num_nodes, H = heads, E = g.num_edges();
+    check_vk(z, "gat_fused_dot_backward: z");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "gat_fused_dot_backward: z ", z.shape_str(), " is not ", H, " heads");
+    check_shape(z, n, -1, "gat_fused_dot_backward: z");
+    check_shape(alpha, E, H, "gat_fused_dot_backward: alpha");
+    check_shape(d_out, n, z.cols(), "gat_fused_dot_backward: d_out");
+    if (!d_z.defined()) return;
+    check_shape(d_z, n, z.cols(), "gat_fused_dot_backward: d_z");
+    const DeviceGraph& dg = device_graph(g);
+    Tensor gs = empty(E, H, DType::f32);
+    Launch l;
+    l.u(n).u(H).u(z.cols() / H).t(z, false, "z").t(alpha, false, "alpha").t(d_out, false, "d_out");
+    l.t(gs, true, "scratch").raw(*dg.indptr).raw(*dg.indices).f(scale);
+    l.per_subgroup("gat_fused_dot_backward", static_cast<std::uint64_t>(n * H));
+    logit_gradient_to_h(dg, z, H, gs, d_z);
+    aggregate_backward(g, alpha, z, d_out, Tensor(), d_z);
   }
 
   void segment_max_forward(const Tensor& x, std::span<const std::int64_t> seg, const Tensor& out,
@@ -617,6 +646,14 @@ class VulkanBackend final : public Backend {
   }
 
  private:
+  // d_h[i] += Σ_e g_e h_j (row side) + Σ_e' g_e' h_d (source side, over the transpose).
+  void logit_gradient_to_h(const DeviceGraph& dg, const Tensor& h, std::int64_t H, const Tensor& gs,
+                           const Tensor& d_h) {
+    Launch l;
+    l.u(dg.num_nodes).u(H).u(h.cols() / H).t(h, false, "h").t(gs, false, "scratch").t(d_h, true, "d_h");
+    l.raw(*dg.indptr).raw(*dg.indices).raw(*dg.out_ptr).raw(*dg.out_dst).raw(*dg.out_edge);
+    l.per_invocation("edge_softmax_dot_backward_h", static_cast<std::uint64_t>(dg.num_nodes * h.cols()));
+  }
   // Segment offsets (validated as the CPU kernels do) uploaded as int32; the
   // storage is released after recording and reused once the work completes.
   static std::shared_ptr<Storage> upload_segments(std::span<const std::int64_t> seg, std::int64_t n, const char* fn) {
