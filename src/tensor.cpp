@@ -1,6 +1,7 @@
 #include "gatcore/tensor.hpp"
 
 #include "gatcore/activation.hpp"
+#include "gatcore/backend.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -129,6 +130,13 @@ Tensor Tensor::rows_slice(std::int64_t r0, std::int64_t r1) const {
 }
 
 Tensor Tensor::clone() const {
+  if (storage_ && storage_->device != Device::cpu) {
+    // A device tensor: a copy on the same device, by its backend.
+    Backend& be = backend(storage_->device);
+    Tensor t = be.empty(rows_, cols_, dtype_);
+    if (rows_ * cols_ != 0) be.copy(*this, t);
+    return t;
+  }
   Tensor t = empty(rows_, cols_, dtype_);
   const char* src = static_cast<const char*>(storage_ ? storage_->host : nullptr);
   GATCORE_CHECK(rows_ * cols_ == 0 || src, "clone: tensor on ", device_name(device()), " is not host-addressable");

@@ -317,10 +317,52 @@ TEST_CASE("vulkan: batchnorm train / eval forward and backward", "[vulkan]") {
   require_close(dbc, dbg, 1e-4f, 1e-4f, "eval d_beta");
 }
 
-TEST_CASE("vulkan: entries without a shader say so", "[vulkan]") {
+TEST_CASE("vulkan: pooling (segment max, broadcast, neighbour mean)", "[vulkan]") {
   if (!vkt::ready()) return;
-  Tensor x = gpu().zeros(4, 3, DType::f32), s = gpu().zeros(1, 3, DType::f32);
-  const std::int64_t seg[] = {0, 4};
-  REQUIRE_THROWS_WITH(gpu().broadcast_segments_forward(s.rows_slice(0, 1), seg, x),
-                      Catch::Contains("not implemented on vulkan"));
+  std::mt19937 rng(8);
+  const std::int64_t n = 61, C = 9;
+  Tensor x = rnd(n, C, rng);
+  x.at(5, 2) = x.at(6, 2);  // a tie: the first maximum wins
+  // Segments with an empty one in the middle.
+  const std::vector<std::int64_t> seg = {0, 20, 20, 45, 61};
+  const std::int64_t S = 4;
+  Tensor oc = Tensor::empty(S, C), ac = Tensor::empty(S, C, DType::i32);
+  Tensor og = gpu().empty(S, C, DType::f32), ag = gpu().empty(S, C, DType::i32);
+  cpu().segment_max_forward(x, seg, oc, ac);
+  gpu().segment_max_forward(V(x), seg, og, ag);
+  require_close(oc, og, 0, 0, "segment_max out");
+  Tensor ah = H(ag);
+  for (std::int64_t s = 0; s < S; ++s)
+    for (std::int64_t c = 0; c < C; ++c) REQUIRE(ah.at_i32(s, c) == ac.at_i32(s, c));
+  Tensor dS = rnd(S, C, rng), dx0 = rnd(n, C, rng);
+  Tensor dxc = dx0.clone(), dxg = V(dx0);
+  cpu().segment_max_backward(dS, ac, dxc);
+  gpu().segment_max_backward(V(dS), ag, dxg);
+  require_close(dxc, dxg, 1e-6f, 1e-6f, "segment_max_backward");
+  Tensor bc = Tensor::empty(n, C), bg = gpu().empty(n, C, DType::f32);
+  cpu().broadcast_segments_forward(oc, seg, bc);
+  gpu().broadcast_segments_forward(og, seg, bg);
+  require_close(bc, bg, 0, 0, "broadcast_segments_forward");
+  Tensor dSc = dS.clone(), dSg = V(dS);
+  cpu().broadcast_segments_backward(dx0, seg, dSc);
+  gpu().broadcast_segments_backward(V(dx0), seg, dSg);
+  require_close(dSc, dSg, 1e-5f, 1e-5f, "broadcast_segments_backward");
+  // Neighbour lists: uneven sizes, an empty one, a node listed by many.
+  std::vector<std::vector<std::int32_t>> nb(static_cast<std::size_t>(n));
+  for (std::int32_t i = 0; i < n; ++i)
+    for (std::int32_t k = 0; k < i % 5; ++k) nb[i].push_back((i * 7 + k * 13) % n);
+  for (std::int32_t i = 0; i < n; i += 2) nb[i].push_back(3);
+  const CsrGraph g = graph_from_neighbour_lists(n, nb);
+  Tensor mc = Tensor::empty(n, C), mg = gpu().empty(n, C, DType::f32);
+  cpu().neighbour_mean_forward(g, x, mc);
+  gpu().neighbour_mean_forward(g, V(x), mg);
+  require_close(mc, mg, 1e-5f, 1e-6f, "neighbour_mean_forward");
+  dxc = dx0.clone();
+  dxg = V(dx0);
+  Tensor d = rnd(n, C, rng);
+  cpu().neighbour_mean_backward(g, d, dxc);
+  gpu().neighbour_mean_backward(g, V(d), dxg);
+  require_close(dxc, dxg, 1e-5f, 1e-5f, "neighbour_mean_backward");
+  REQUIRE_THROWS_WITH(gpu().broadcast_segments_forward(og, std::vector<std::int64_t>{0, 5}, bg),
+                      Catch::Contains("seg_ptr"));
 }

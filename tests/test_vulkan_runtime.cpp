@@ -28,6 +28,18 @@ TEST_CASE("vulkan: ops are batched into one submission per host read", "[vulkan]
   double expect = 0;
   for (float v : a.to_vector()) expect += 25.0 * v;
   REQUIRE(total == Approx(expect).epsilon(1e-4).margin(1e-3));
+  // A batch is cut (submitted) after 8192 dispatches without a host read.
+  vulkan::sync();
+  const auto s0 = vulkan::stats();
+  for (int k = 0; k < 8200; ++k) be.axpy(1e-3f, x, y);
+  REQUIRE(vulkan::stats().submits == s0.submits + 1);
+  vulkan::sync();
+  REQUIRE(vulkan::stats().submits == s0.submits + 2);
+  // clone() of a device tensor stays on the device (also of a strided view).
+  Tensor c = y.cols_slice(3, 9).clone();
+  REQUIRE(c.device() == Device::vulkan);
+  REQUIRE(c.contiguous());
+  vkt::require_close(H(y).cols_slice(3, 9).clone(), c, 0, 0, "clone");
   // Device tensors are not host-addressable.
   REQUIRE_THROWS_WITH(y.data(), Catch::Contains("not host-addressable"));
 }
@@ -62,6 +74,11 @@ TEST_CASE("vulkan: clear errors for a missing device and out of memory", "[vulka
   if (!vkt::ready()) return;
   REQUIRE_THROWS_WITH(vulkan::init("no-such-vulkan-device"), Catch::Contains("no Vulkan device matches"));
   REQUIRE_THROWS_WITH(vulkan::init("99"), Catch::Contains("out of range"));
+  // Selecting the current device again, by index or by name, is a no-op.
+  const auto cur = vulkan::current_device();
+  REQUIRE_NOTHROW(vulkan::init(std::to_string(cur.index)));
+  if (cur.index == 0) REQUIRE_NOTHROW(vulkan::init(cur.name));
+  REQUIRE(vulkan::select(std::to_string(cur.index)) == Device::vulkan);
   Backend& be = backend(Device::vulkan);
   REQUIRE_THROWS_WITH(be.empty(std::int64_t{1} << 21, std::int64_t{1} << 20, DType::f32),
                       Catch::Contains("out of device memory"));

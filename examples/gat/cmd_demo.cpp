@@ -11,8 +11,10 @@
 
 #include <omp.h>
 
+#include "gatcore/backend.hpp"
 #include "gatcore/ops.hpp"
 #include "gatcore/optim.hpp"
+#include "gatcore/vulkan.hpp"
 #include "commands.hpp"
 #include "tube_character.hpp"
 
@@ -44,9 +46,12 @@ struct MiniDenseGat {
   };
   std::vector<Block> blocks;
 
-  explicit MiniDenseGat(std::mt19937& rng) {
+  Device dev;
+
+  // Parameters are drawn on the CPU (the same for every device) and moved to `dev`.
+  MiniDenseGat(std::mt19937& rng, Device d) : dev(d) {
     auto P = [&](std::int64_t r, std::int64_t c, const std::string& name, float bound) {
-      Var v = Var::parameter(uniform(r, c, bound, rng), name);
+      Var v = Var::parameter(to(uniform(r, c, bound, rng), dev), name);
       params.push_back(v);
       return v;
     };
@@ -64,8 +69,8 @@ struct MiniDenseGat {
       bl.a_r = P(kHeads, kF, pre + "att_src", glorot(kF, 1));
       bl.Ws = P(width, kSelf, pre + "self.W", glorot(width, kSelf));
       bl.bs = P(1, kSelf, pre + "self.b", 0.f);
-      bl.gamma = Var::parameter(Tensor::full(1, kBlockOut, 1.f), pre + "bn.gamma");
-      bl.beta = Var::parameter(Tensor::zeros(1, kBlockOut), pre + "bn.beta");
+      bl.gamma = Var::parameter(to(Tensor::full(1, kBlockOut, 1.f), dev), pre + "bn.gamma");
+      bl.beta = Var::parameter(to(Tensor::zeros(1, kBlockOut), dev), pre + "bn.beta");
       params.push_back(bl.gamma);
       params.push_back(bl.beta);
       blocks.push_back(std::move(bl));
@@ -80,8 +85,8 @@ struct MiniDenseGat {
   Var forward(const GraphPtr& g, const Tensor& x, bool training) {
     const std::int64_t n = g->num_nodes;
     // The dense buffer: [transform output | block 1 | block 2 | ...].
-    Var buf(Tensor::empty(n, kT + kBlocks * kBlockOut));
-    Var t = tanh(linear(Var(x), t1_W, t1_b));
+    Var buf(backend(dev).empty(n, kT + kBlocks * kBlockOut));
+    Var t = tanh(linear(Var(to(x, dev)), t1_W, t1_b));
     tanh(linear(t, t2_W, t2_b), buf.cols_slice(0, kT));
     std::int64_t c0 = kT;
     for (Block& b : blocks) {
@@ -131,9 +136,11 @@ std::pair<Tensor, Tensor> stack(const std::vector<Sample>& batch) {
 
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
-               "usage: gat demo [--epochs N] [--batch B] [--seed S] [--lr LR]\n"
+               "usage: gat demo [--epochs N] [--batch B] [--seed S] [--lr LR] [--device cpu|vulkan|auto]\n"
                "  Trains a small DenseGATs-style network on the embedded two-bone tube to\n"
-               "  correct linear blend skinning, then reports held-out vertex errors.\n");
+               "  correct linear blend skinning, then reports held-out vertex errors.\n"
+               "  --device vulkan trains on the Vulkan device GATCORE_VK_DEVICE selects (or the\n"
+               "  first GPU); auto uses Vulkan when a GPU is there, else the CPU.\n");
   return rc;
 }
 
@@ -153,6 +160,7 @@ bool parse_int(const char* flag, const char* v, long lo, long hi, long& out) {
 int gat::cmd_demo(int argc, char** argv) {
   long epochs = 600, batch_size = 8, seed = 7;
   float lr = 3e-3f;
+  std::string device = "cpu";
   for (int i = 1; i < argc; ++i) {
     const bool has_value = i + 1 < argc;
     if (!std::strcmp(argv[i], "--epochs") && has_value) {
@@ -161,6 +169,12 @@ int gat::cmd_demo(int argc, char** argv) {
       if (!parse_int("--batch", argv[++i], 2, 256, batch_size)) return 2;
     } else if (!std::strcmp(argv[i], "--seed") && has_value) {
       if (!parse_int("--seed", argv[++i], 0, 2147483647L, seed)) return 2;
+    } else if (!std::strcmp(argv[i], "--device") && has_value) {
+      device = argv[++i];
+      if (device != "cpu" && device != "vulkan" && device != "auto") {
+        std::fprintf(stderr, "gat: --device expects cpu, vulkan or auto, got '%s'\n", device.c_str());
+        return 2;
+      }
     } else if (!std::strcmp(argv[i], "--lr") && has_value) {
       char* end = nullptr;
       lr = std::strtof(argv[++i], &end);
@@ -175,6 +189,7 @@ int gat::cmd_demo(int argc, char** argv) {
     }
   }
 
+  const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
   std::mt19937 rng(static_cast<unsigned>(seed));
   const demo::TubeCharacter tube = demo::make_tube();
   const CsrGraph one = graph_from_triangles(tube.num_vertices(), tube.triangles);
@@ -198,8 +213,9 @@ int gat::cmd_demo(int argc, char** argv) {
   std::printf("gat demo: two-bone tube, %lld vertices, %lld edges (with self-loops), %d OpenMP threads\n",
               static_cast<long long>(tube.num_vertices()), static_cast<long long>(one.num_edges()),
               omp_get_max_threads());
+  if (dev == Device::vulkan) std::printf("device: vulkan (%s)\n", vulkan::current_device().name.c_str());
 
-  MiniDenseGat net(rng);
+  MiniDenseGat net(rng, dev);
   Adam opt(net.params, AdamOptions{lr});
   std::vector<Sample> held_out;
   for (int k = 0; k < 16; ++k) held_out.push_back(make_sample(tube, random_pose(rng), disp_scale));
@@ -210,11 +226,11 @@ int gat::cmd_demo(int argc, char** argv) {
     for (long b = 0; b < batch_size; ++b) batch.push_back(make_sample(tube, random_pose(rng), disp_scale));
     auto [x, y] = stack(batch);
     check_node_features(*train_graph, x, "demo features");
-    Var loss = mse_loss(net.forward(train_graph, x, true), y);
+    Var loss = mse_loss(net.forward(train_graph, x, true), to(y, dev));
     opt.zero_grad();
     backward(loss);
     opt.step();
-    const float l = loss.value().at(0, 0);
+    const float l = to(loss.value(), Device::cpu).at(0, 0);  // on Vulkan: the step's one submission
     if (!std::isfinite(l)) {
       std::fprintf(stderr, "gat demo: training diverged at epoch %ld (loss %g); try a smaller --lr\n", epoch, l);
       return 1;
@@ -229,12 +245,12 @@ int gat::cmd_demo(int argc, char** argv) {
   double lbs_sum = 0, net_sum = 0, lbs_max = 0, net_max = 0, lbs_joint = 0, net_joint = 0;
   std::int64_t count = 0, joint_count = 0;
   for (const Sample& s : held_out) {
-    Var pred = net.forward(eval_graph, s.features, false);
+    const Tensor pred_value = to(net.forward(eval_graph, s.features, false).value(), Device::cpu);
     for (std::int64_t i = 0; i < tube.num_vertices(); ++i) {
       double e_lbs = 0, e_net = 0;
       for (int k = 0; k < 3; ++k) {
         const double d = s.reference[i][k] - s.lbs[i][k];
-        const double r = d - pred.value().at(i, k) / disp_scale;
+        const double r = d - pred_value.at(i, k) / disp_scale;
         e_lbs += d * d;
         e_net += r * r;
       }

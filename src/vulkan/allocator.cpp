@@ -17,6 +17,7 @@ namespace {
 struct Cache {
   std::multimap<std::uint64_t, Buffer*> free_device, free_staging;
   std::vector<Buffer*> pending;
+  std::uint64_t pending_bytes = 0;
   std::uint64_t cached = 0;
 };
 // Never destroyed: tensors in static objects may release buffers during
@@ -115,6 +116,9 @@ void release_storage(Storage& s) {
 
 Buffer* acquire_buffer(std::uint64_t bytes, bool staging) {
   const std::uint64_t size = size_class(bytes);
+  // Buffers released during a long batch only come back after it completes:
+  // past 1 GiB of them, complete it now and reuse them.
+  if (g_cache.pending_bytes > (std::uint64_t{1} << 30)) flush();
   auto& fl = staging ? g_cache.free_staging : g_cache.free_device;
   // Reuse a cached buffer of this class (or one class up, at most 2x).
   auto it = fl.lower_bound(size);
@@ -139,6 +143,7 @@ void release_buffer(Buffer* b) {
   if (!b || !has_ctx()) return;  // process teardown: the device outlives the tensors
   if (has_pending_work()) {
     g_cache.pending.push_back(b);
+    g_cache.pending_bytes += b->size;
   } else {
     (b->host_visible && !ctx().unified ? g_cache.free_staging : g_cache.free_device).emplace(b->size, b);
     g_cache.cached += b->size;
@@ -151,6 +156,7 @@ void recycle_pending_buffers() {
     g_cache.cached += b->size;
   }
   g_cache.pending.clear();
+  g_cache.pending_bytes = 0;
 }
 
 void free_cached_buffers() {

@@ -1,7 +1,7 @@
 // Backend for Device::vulkan: every entry records compute dispatches of the
 // shaders/ of the same name into the current command buffer (stream.cpp).
-// Entries without a shader yet throw "<op> is not implemented on vulkan";
-// nothing ever falls back to the CPU silently.
+// Every entry has a shader; none falls back to the CPU (device tensors are
+// not host-addressable, so a CPU kernel could not even read them).
 //
 // Tensor views are bound at their (alignment-rounded) byte offset with the
 // residual element offset and row stride in push constants, so a binding
@@ -20,11 +20,6 @@
 namespace gatcore::vk {
 
 namespace {
-
-[[noreturn]] void not_implemented(const char* op) {
-  throw Error(detail::cat(op, " is not implemented on vulkan (no shader yet); move the tensors to the CPU with "
-                              "to(t, Device::cpu) to run it there"));
-}
 
 void check_vk(const Tensor& t, const char* what) {
   GATCORE_CHECK(t.defined(), what, ": tensor is undefined");
@@ -466,10 +461,7 @@ class VulkanBackend final : public Backend {
       l.f(scale);
       l.per_invocation("edge_softmax_dot_backward", static_cast<std::uint64_t>(n * H));
     }
-    Launch l;
-    l.u(n).u(H).u(h.cols() / H).t(h, false, "h").t(gs, false, "scratch").t(d_h, true, "d_h");
-    l.raw(*dg.indptr).raw(*dg.indices).raw(*dg.out_ptr).raw(*dg.out_dst).raw(*dg.out_edge);
-    l.per_invocation("edge_softmax_dot_backward_h", static_cast<std::uint64_t>(n * h.cols()));
+    logit_gradient_to_h(dg, h, H, gs, d_h);
   }
   void aggregate_forward(const CsrGraph& g, const Tensor& alpha, const Tensor& z, const Tensor& out) override {
     const std::int64_t n = g.num_nodes, H = alpha.cols();
@@ -508,52 +500,173 @@ class VulkanBackend final : public Backend {
       l.per_invocation("aggregate_backward_z", static_cast<std::uint64_t>(n * z.cols()));
     }
   }
-  // The fused ops run as their unfused shaders (identical results by the
-  // kernels' definition); d_alpha of the backward lives in a cached scratch.
+  // Fused ops: one row shader each (forward: logits + softmax + aggregation,
+  // only alpha stored; backward: d_alpha formed on the fly, the logit
+  // gradient left in a cached scratch [E, H] for the transpose gathers), plus
+  // the gathers shared with the unfused backwards.
   void gat_fused_additive_forward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
                                   float slope, const Tensor& out, const Tensor& alpha) override {
-    edge_softmax_additive_forward(g, el, er, slope, alpha);
-    aggregate_forward(g, alpha, z, out);
+    const std::int64_t n = g.num_nodes, H = el.cols();
+    check_vk(z, "gat_fused_additive_forward: z");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "gat_fused_additive_forward: z ", z.shape_str(), " is not ", H,
+                  " heads");
+    check_shape(z, n, -1, "gat_fused_additive_forward: z");
+    check_shape(el, n, H, "gat_fused_additive_forward: el");
+    check_shape(er, n, H, "gat_fused_additive_forward: er");
+    check_shape(out, n, z.cols(), "gat_fused_additive_forward: out");
+    check_shape(alpha, g.num_edges(), H, "gat_fused_additive_forward: alpha");
+    const DeviceGraph& dg = device_graph(g);
+    Launch l;
+    l.u(n).u(H).u(z.cols() / H).t(z, false, "z").t(el, false, "el").t(er, false, "er").t(out, true, "out");
+    l.t(alpha, true, "alpha").raw(*dg.indptr).raw(*dg.indices).f(slope);
+    l.per_subgroup("gat_fused_additive_forward", static_cast<std::uint64_t>(n * H));
   }
   void gat_fused_dot_forward(const CsrGraph& g, const Tensor& z, int heads, float scale, const Tensor& out,
                              const Tensor& alpha) override {
-    edge_softmax_dot_forward(g, z, heads, scale, alpha);
-    aggregate_forward(g, alpha, z, out);
+    const std::int64_t n = g.num_nodes, H = heads;
+    check_vk(z, "gat_fused_dot_forward: z");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "gat_fused_dot_forward: z ", z.shape_str(), " is not ", H, " heads");
+    check_shape(z, n, -1, "gat_fused_dot_forward: z");
+    check_shape(out, n, z.cols(), "gat_fused_dot_forward: out");
+    check_shape(alpha, g.num_edges(), H, "gat_fused_dot_forward: alpha");
+    const DeviceGraph& dg = device_graph(g);
+    Launch l;
+    l.u(n).u(H).u(z.cols() / H).t(z, false, "z").t(out, true, "out").t(alpha, true, "alpha");
+    l.raw(*dg.indptr).raw(*dg.indices).f(scale);
+    l.per_subgroup("gat_fused_dot_forward", static_cast<std::uint64_t>(n * H));
   }
   void gat_fused_additive_backward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
                                    float slope, const Tensor& alpha, const Tensor& d_out, const Tensor& d_z,
                                    const Tensor& d_el, const Tensor& d_er) override {
-    Tensor d_alpha = empty(alpha.rows(), alpha.cols(), DType::f32);
-    aggregate_backward(g, alpha, z, d_out, d_alpha, d_z);
-    edge_softmax_additive_backward(g, el, er, slope, alpha, d_alpha, d_el, d_er);
+    const std::int64_t n = g.num_nodes, H = alpha.cols(), E = g.num_edges();
+    check_vk(z, "gat_fused_additive_backward: z");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "gat_fused_additive_backward: z ", z.shape_str(), " is not ", H,
+                  " heads");
+    check_shape(z, n, -1, "gat_fused_additive_backward: z");
+    check_shape(alpha, E, H, "gat_fused_additive_backward: alpha");
+    check_shape(el, n, H, "gat_fused_additive_backward: el");
+    check_shape(er, n, H, "gat_fused_additive_backward: er");
+    check_shape(d_out, n, z.cols(), "gat_fused_additive_backward: d_out");
+    if (d_el.defined()) check_shape(d_el, n, H, "gat_fused_additive_backward: d_el");
+    if (d_er.defined()) check_shape(d_er, n, H, "gat_fused_additive_backward: d_er");
+    if (d_el.defined() || d_er.defined()) {
+      const DeviceGraph& dg = device_graph(g);
+      Tensor gs = empty(E, H, DType::f32);
+      Launch l;
+      l.u(n).u(H).u(z.cols() / H).t(z, false, "z").t(el, false, "el").t(er, false, "er").t(alpha, false, "alpha");
+      l.t(d_out, false, "d_out").opt(d_el, true, "d_el").t(gs, true, "scratch").raw(*dg.indptr).raw(*dg.indices);
+      l.f(slope).u(d_el.defined());
+      l.per_subgroup("gat_fused_additive_backward", static_cast<std::uint64_t>(n * H));
+      if (d_er.defined()) gather_transpose(dg, gs, d_er);
+    }
+    if (d_z.defined()) aggregate_backward(g, alpha, z, d_out, Tensor(), d_z);
   }
   void gat_fused_dot_backward(const CsrGraph& g, const Tensor& z, int heads, float scale, const Tensor& alpha,
                               const Tensor& d_out, const Tensor& d_z) override {
-    Tensor d_alpha = empty(alpha.rows(), alpha.cols(), DType::f32);
-    aggregate_backward(g, alpha, z, d_out, d_alpha, d_z);
-    edge_softmax_dot_backward(g, z, heads, scale, alpha, d_alpha, d_z);
+    const std::int64_t n = g.num_nodes, H = heads, E = g.num_edges();
+    check_vk(z, "gat_fused_dot_backward: z");
+    GATCORE_CHECK(H > 0 && z.cols() % H == 0, "gat_fused_dot_backward: z ", z.shape_str(), " is not ", H, " heads");
+    check_shape(z, n, -1, "gat_fused_dot_backward: z");
+    check_shape(alpha, E, H, "gat_fused_dot_backward: alpha");
+    check_shape(d_out, n, z.cols(), "gat_fused_dot_backward: d_out");
+    if (!d_z.defined()) return;
+    check_shape(d_z, n, z.cols(), "gat_fused_dot_backward: d_z");
+    const DeviceGraph& dg = device_graph(g);
+    Tensor gs = empty(E, H, DType::f32);
+    Launch l;
+    l.u(n).u(H).u(z.cols() / H).t(z, false, "z").t(alpha, false, "alpha").t(d_out, false, "d_out");
+    l.t(gs, true, "scratch").raw(*dg.indptr).raw(*dg.indices).f(scale);
+    l.per_subgroup("gat_fused_dot_backward", static_cast<std::uint64_t>(n * H));
+    logit_gradient_to_h(dg, z, H, gs, d_z);
+    aggregate_backward(g, alpha, z, d_out, Tensor(), d_z);
   }
 
-  void segment_max_forward(const Tensor&, std::span<const std::int64_t>, const Tensor&, const Tensor&) override {
-    not_implemented("segment_max_forward");
+  void segment_max_forward(const Tensor& x, std::span<const std::int64_t> seg, const Tensor& out,
+                           const Tensor& argmax) override {
+    check_vk(x, "segment_max_forward: x");
+    const auto sp = upload_segments(seg, x.rows(), "segment_max_forward");
+    const std::int64_t S = static_cast<std::int64_t>(seg.size()) - 1, C = x.cols();
+    check_shape(out, S, C, "segment_max_forward: out");
+    check_shape(argmax, S, C, "segment_max_forward: argmax");
+    GATCORE_CHECK(argmax.dtype() == DType::i32, "segment_max_forward: argmax must be int32");
+    Launch l;
+    l.u(S).u(C).t(x, false, "x").t(out, true, "out").t(argmax, true, "argmax").raw(*sp);
+    l.per_invocation("segment_max_forward", static_cast<std::uint64_t>(S * C));
   }
-  void segment_max_backward(const Tensor&, const Tensor&, const Tensor&) override {
-    not_implemented("segment_max_backward");
+  void segment_max_backward(const Tensor& d_out, const Tensor& argmax, const Tensor& d_x) override {
+    check_vk(d_out, "segment_max_backward: d_out");
+    check_shape(argmax, d_out.rows(), d_out.cols(), "segment_max_backward: argmax");
+    GATCORE_CHECK(argmax.dtype() == DType::i32, "segment_max_backward: argmax must be int32");
+    if (!d_x.defined()) return;
+    check_shape(d_x, -1, d_out.cols(), "segment_max_backward: d_x");
+    Launch l;
+    l.u(d_out.rows()).u(d_out.cols()).t(d_out, false, "d_out").t(argmax, false, "argmax").t(d_x, true, "d_x");
+    l.per_invocation("segment_max_backward", static_cast<std::uint64_t>(d_out.numel()));
   }
-  void broadcast_segments_forward(const Tensor&, std::span<const std::int64_t>, const Tensor&) override {
-    not_implemented("broadcast_segments_forward");
+  void broadcast_segments_forward(const Tensor& x, std::span<const std::int64_t> seg, const Tensor& out) override {
+    check_vk(x, "broadcast_segments_forward: x");
+    check_vk(out, "broadcast_segments_forward: out");
+    const auto sp = upload_segments(seg, out.rows(), "broadcast_segments_forward");
+    const std::int64_t S = static_cast<std::int64_t>(seg.size()) - 1;
+    check_shape(x, S, out.cols(), "broadcast_segments_forward: x");
+    if (S == 0) return;
+    Launch l;
+    l.u(out.rows()).u(out.cols()).u(S).t(x, false, "x").t(out, true, "out").raw(*sp);
+    l.per_invocation("broadcast_segments_forward", static_cast<std::uint64_t>(out.numel()));
   }
-  void broadcast_segments_backward(const Tensor&, std::span<const std::int64_t>, const Tensor&) override {
-    not_implemented("broadcast_segments_backward");
+  void broadcast_segments_backward(const Tensor& d_out, std::span<const std::int64_t> seg,
+                                   const Tensor& d_x) override {
+    check_vk(d_out, "broadcast_segments_backward: d_out");
+    const auto sp = upload_segments(seg, d_out.rows(), "broadcast_segments_backward");
+    if (!d_x.defined()) return;
+    const std::int64_t S = static_cast<std::int64_t>(seg.size()) - 1;
+    check_shape(d_x, S, d_out.cols(), "broadcast_segments_backward: d_x");
+    Launch l;
+    l.u(S).u(d_out.cols()).t(d_out, false, "d_out").t(d_x, true, "d_x").raw(*sp);
+    l.per_invocation("broadcast_segments_backward", static_cast<std::uint64_t>(S * d_out.cols()));
   }
-  void neighbour_mean_forward(const CsrGraph&, const Tensor&, const Tensor&) override {
-    not_implemented("neighbour_mean_forward");
+  void neighbour_mean_forward(const CsrGraph& nbr, const Tensor& x, const Tensor& out) override {
+    check_vk(x, "neighbour_mean_forward: x");
+    check_shape(out, nbr.num_nodes, x.cols(), "neighbour_mean_forward: out");
+    const DeviceGraph& dg = device_graph(nbr);
+    Launch l;
+    l.u(nbr.num_nodes).u(x.cols()).t(x, false, "x").t(out, true, "out").raw(*dg.indptr).raw(*dg.indices);
+    l.per_invocation("neighbour_mean_forward", static_cast<std::uint64_t>(out.numel()));
   }
-  void neighbour_mean_backward(const CsrGraph&, const Tensor&, const Tensor&) override {
-    not_implemented("neighbour_mean_backward");
+  void neighbour_mean_backward(const CsrGraph& nbr, const Tensor& d_out, const Tensor& d_x) override {
+    check_vk(d_out, "neighbour_mean_backward: d_out");
+    check_shape(d_out, nbr.num_nodes, -1, "neighbour_mean_backward: d_out");
+    if (!d_x.defined()) return;
+    check_shape(d_x, nbr.num_nodes, d_out.cols(), "neighbour_mean_backward: d_x");
+    const DeviceGraph& dg = device_graph(nbr);
+    Launch l;
+    l.u(nbr.num_nodes).u(d_out.cols()).t(d_out, false, "d_out").t(d_x, true, "d_x");
+    l.raw(*dg.indptr).raw(*dg.out_ptr).raw(*dg.out_dst);
+    l.per_invocation("neighbour_mean_backward", static_cast<std::uint64_t>(d_x.numel()));
   }
 
  private:
+  // d_h[i] += Σ_e g_e h_j (row side) + Σ_e' g_e' h_d (source side, over the transpose).
+  void logit_gradient_to_h(const DeviceGraph& dg, const Tensor& h, std::int64_t H, const Tensor& gs,
+                           const Tensor& d_h) {
+    Launch l;
+    l.u(dg.num_nodes).u(H).u(h.cols() / H).t(h, false, "h").t(gs, false, "scratch").t(d_h, true, "d_h");
+    l.raw(*dg.indptr).raw(*dg.indices).raw(*dg.out_ptr).raw(*dg.out_dst).raw(*dg.out_edge);
+    l.per_invocation("edge_softmax_dot_backward_h", static_cast<std::uint64_t>(dg.num_nodes * h.cols()));
+  }
+  // Segment offsets (validated as the CPU kernels do) uploaded as int32; the
+  // storage is released after recording and reused once the work completes.
+  static std::shared_ptr<Storage> upload_segments(std::span<const std::int64_t> seg, std::int64_t n, const char* fn) {
+    GATCORE_CHECK(!seg.empty(), fn, ": seg_ptr: empty (needs S + 1 offsets)");
+    GATCORE_CHECK(seg.front() == 0 && seg.back() == n, fn, ": seg_ptr: must start at 0 and end at the row count ", n,
+                  ", got [", seg.front(), ", ..., ", seg.back(), "]");
+    std::vector<std::int32_t> v(seg.size());
+    for (std::size_t s = 0; s < seg.size(); ++s) {
+      if (s) GATCORE_CHECK(seg[s - 1] <= seg[s], fn, ": seg_ptr: decreases at ", s, " (", seg[s - 1], " > ", seg[s], ")");
+      v[s] = static_cast<std::int32_t>(u32(seg[s], "segment offset"));
+    }
+    return upload(v.data(), v.size() * 4);
+  }
   void batchnorm_forward(std::uint32_t mode, const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
                          float momentum, const Tensor& y, const Tensor& smean, const Tensor& sinv, const Tensor& rm,
                          const Tensor& rv) {

@@ -5,6 +5,9 @@
 // reads or writes a buffer written since the last barrier, or writes a buffer
 // read since then, gets one global compute/transfer memory barrier first.
 // Descriptor sets come from pools that are reset after each submission.
+// A batch is also submitted (and waited for) once it holds kMaxBatch
+// dispatches, or once buffers released during it exceed kMaxPendingBytes
+// (allocator.cpp), so a long host-read-free loop cannot grow without bound.
 #include <unordered_set>
 
 #include "src/vulkan/runtime.hpp"
@@ -20,6 +23,7 @@ struct Stream {
   std::vector<VkDescriptorPool> desc_pools;
   std::size_t desc_pool_used = 0;  // index of the pool being allocated from
   bool recording = false;
+  std::uint64_t batch_dispatches = 0;
   std::unordered_set<VkBuffer> written, read;
   Buffer* dummy = nullptr;
   VkPipeline bound = VK_NULL_HANDLE;
@@ -28,6 +32,7 @@ Stream g_s;
 vulkan::Stats g_stats;
 
 constexpr std::uint32_t kSetsPerPool = 1024;
+constexpr std::uint64_t kMaxBatch = 8192;
 
 VkDescriptorPool new_desc_pool() {
   VkDescriptorPoolSize ps{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * kMaxBindings};
@@ -114,6 +119,7 @@ void dispatch(const char* shader, const std::vector<Binding>& bindings, const vo
   GATCORE_CHECK(bindings.size() <= kMaxBindings && push_bytes <= kPushBytes, "vulkan: ", shader,
                 ": too many bindings / push constants");
   if (gx == 0 || gy == 0 || gz == 0) return;
+  if (g_s.batch_dispatches >= kMaxBatch) flush();
   Context& c = ctx();
   GATCORE_CHECK(gx <= c.props.limits.maxComputeWorkGroupCount[0] && gy <= c.props.limits.maxComputeWorkGroupCount[1] &&
                     gz <= c.props.limits.maxComputeWorkGroupCount[2],
@@ -149,6 +155,7 @@ void dispatch(const char* shader, const std::vector<Binding>& bindings, const vo
   if (push_bytes) vkCmdPushConstants(g_s.cb, pipeline_layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
   vkCmdDispatch(g_s.cb, gx, gy, gz);
   ++g_stats.dispatches;
+  ++g_s.batch_dispatches;
 }
 
 void copy_buffer(VkBuffer src, std::uint64_t src_off, VkBuffer dst, std::uint64_t dst_off, std::uint64_t bytes) {
@@ -179,6 +186,7 @@ void flush() {
   check(vkResetCommandPool(c.device, g_s.pool, 0), "vkResetCommandPool");
   for (VkDescriptorPool p : g_s.desc_pools) check(vkResetDescriptorPool(c.device, p, 0), "vkResetDescriptorPool");
   g_s.desc_pool_used = 0;
+  g_s.batch_dispatches = 0;
   g_s.written.clear();
   g_s.read.clear();
   recycle_pending_buffers();

@@ -1,0 +1,23 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// d_x[j,c] += Σ_{i: j in N(i)} d_out[i,c] / |N(i)|   (gather over the transpose)
+#include "common.glsl"
+#include "elementwise.glsl"
+#include "graph.glsl"
+layout(push_constant) uniform Push { uint n; uint C; VIEW(dout); VIEW(dx); } pc;
+BUF(0, dout);
+BUF(1, dx);
+IBUF(2, indptr);
+IBUF(3, out_ptr);
+IBUF(4, out_dst);
+void main() {
+  uint id = flat_id();
+  if (id >= pc.n * pc.C) return;
+  uint j = id / pc.C, c = id % pc.C;
+  float acc = 0.0;
+  for (uint t = uint(out_ptr[j]); t < uint(out_ptr[j + 1u]); ++t) {
+    uint i = uint(out_dst[t]);
+    acc += dout[AT(dout, i, c)] / float(indptr[i + 1u] - indptr[i]);
+  }
+  dx[AT(dx, j, c)] += acc;
+}
