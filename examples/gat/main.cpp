@@ -10,6 +10,7 @@ namespace {
 constexpr gat::Command kCommands[] = {
     {"demo", gat::cmd_demo, "train a small DenseGATs on the embedded tube character, compare with LBS"},
     {"info", gat::cmd_info, "print what a character (.glb/.gltf) or motion (.bvh) file holds"},
+    {"errormap", gat::cmd_errormap, "render where LBS departs from the reference deformer (Delta Mush) as a PNG"},
 };
 
 int usage(int rc) {
