@@ -134,3 +134,46 @@ TEST_CASE("samples of a real character driven by a retargeted CMU walk", "[chara
   s.target.check_finite("target");
   CHECK(s.features.cols() == 6 + 49);
 }
+
+TEST_CASE("dataset descriptions round-trip and drive deterministic epochs", "[character][dataset]") {
+  DatasetDescription settings;
+  settings.random_poses = 3;
+  settings.subsample = 300;
+  settings.seed = 5;
+  settings.validation = 0.25f;
+  settings.test = 0.25f;
+  settings.delta_mush = {15, 0.4f};
+  const DatasetDescription d = describe_dataset(
+      {"procedural:humanoid:0", "procedural:humanoid:1", "procedural:creature:2", "procedural:humanoid:3"}, {}, settings);
+  CHECK(d.split.train.size() == 2);
+  const auto path = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "dataset.json").string();
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  save_dataset(path, d);
+  const DatasetDescription e = load_dataset(path);
+  CHECK(e.characters == d.characters);
+  CHECK(e.split.train == d.split.train);
+  CHECK(e.split.test == d.split.test);
+  CHECK(e.delta_mush.iterations == 15);
+  CHECK(e.delta_mush.step == 0.4f);
+  CHECK(e.subsample == 300);
+  std::vector<PreparedCharacter> pcs;
+  for (const auto& c : e.characters) pcs.push_back(prepare_character(load_dataset_character(c), e.delta_mush));
+  const auto t1 = dataset_tasks(e, pcs, {}, e.split.train, 0), t2 = dataset_tasks(e, pcs, {}, e.split.train, 0),
+             t3 = dataset_tasks(e, pcs, {}, e.split.train, 1);
+  REQUIRE(t1.size() == 6);
+  for (std::size_t i = 0; i < t1.size(); ++i) {
+    CHECK(t1[i].first == t2[i].first);
+    CHECK(t1[i].pose.local[3].rotation == t2[i].pose.local[3].rotation);
+    CHECK(t1[i].count == 300);
+  }
+  CHECK(t1[0].pose.local[3].rotation != t3[0].pose.local[3].rotation);
+  std::size_t got = 0;
+  stream_densegats_samples(pcs, t1, [&](DenseGatsSample&& s) { got += s.features.rows() == 300; });
+  CHECK(got == 6);
+  // Bad files name the file and the problem.
+  const std::string bad = charfix::write_temp("bad_dataset.json", "{\"format\": \"gatcore-dataset\", \"version\": 1}");
+  CHECK_THROWS_WITH(load_dataset(bad), Catch::Matchers::Contains("bad_dataset.json") && Catch::Matchers::Contains("characters"));
+  const std::string garbage = charfix::write_temp("garbage_dataset.json", "not json");
+  CHECK_THROWS_WITH(load_dataset(garbage), Catch::Matchers::Contains("garbage_dataset.json"));
+  CHECK_THROWS_WITH(load_dataset_character("procedural:dragon:1"), Catch::Matchers::Contains("procedural:dragon:1"));
+}

@@ -17,5 +17,6 @@ struct Command {
 int cmd_demo(int argc, char** argv);
 int cmd_info(int argc, char** argv);
 int cmd_errormap(int argc, char** argv);
+int cmd_dataset(int argc, char** argv);
 
 }  // namespace gat

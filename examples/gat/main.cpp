@@ -11,6 +11,7 @@ constexpr gat::Command kCommands[] = {
     {"demo", gat::cmd_demo, "train a small DenseGATs on the embedded tube character, compare with LBS"},
     {"info", gat::cmd_info, "print what a character (.glb/.gltf) or motion (.bvh) file holds"},
     {"errormap", gat::cmd_errormap, "render where LBS departs from the reference deformer (Delta Mush) as a PNG"},
+    {"dataset", gat::cmd_dataset, "build a dataset description (characters, motions, split, reference deformer)"},
 };
 
 int usage(int rc) {

@@ -9,12 +9,14 @@
 // graph. Samples are in normalised coordinates (NormalisationStats).
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <span>
 #include <vector>
 
 #include "gatcore/character/character.hpp"
 #include "gatcore/character/deform.hpp"
 #include "gatcore/character/features.hpp"
+#include "gatcore/character/motion.hpp"
 #include "gatcore/graph.hpp"
 #include "gatcore/tensor.hpp"
 
@@ -78,5 +80,41 @@ struct SampleTask {
 // disabled inside the pipeline's tasks (SerialRegion).
 void stream_densegats_samples(const std::vector<PreparedCharacter>& characters, const std::vector<SampleTask>& tasks,
                               const std::function<void(DenseGatsSample&&)>& sink, int tokens = 4);
+
+}  // namespace gatcore::character
+
+namespace gatcore::character {
+
+// What `gat dataset build` writes (JSON): the sources and every setting the
+// samples depend on, so a trainer regenerates identical samples on the fly.
+struct DatasetDescription {
+  std::vector<std::string> characters;  // file paths, or "procedural:humanoid:SEED" / "procedural:creature:SEED"
+  std::vector<std::string> motions;     // BVH files, retargeted onto every character (CMU joint names)
+  int random_poses = 32;                // per character per epoch
+  float pose_angle = 0.5f;              // uniform_limits(+-pose_angle) around the bind pose
+  int motion_stride = 4;                // every k-th motion frame
+  std::uint32_t seed = 0;
+  DeltaMushParams delta_mush;           // the reference deformer's parameters
+  std::int64_t subsample = 1000;        // DenseGATs: consecutive vertices per sample (<= 0: whole mesh)
+  float validation = 0.1f, test = 0.1f;
+  Split split;                          // by character, from seed
+};
+
+// Fills the split from the fractions and the seed.
+DatasetDescription describe_dataset(std::vector<std::string> characters, std::vector<std::string> motions,
+                                    const DatasetDescription& settings = {});
+void save_dataset(const std::string& path, const DatasetDescription& d);
+// Throws InvalidArgument naming the file and the field for bad files.
+DatasetDescription load_dataset(const std::string& path);
+// A character by its dataset entry (a file, or a procedural spec).
+Character load_dataset_character(const std::string& entry);
+
+// The DenseGATs tasks of one epoch for the given characters (indices into
+// d.characters; `prepared` and `motions` are the loaded ones, all of them):
+// random poses and strided motion frames, each with a random vertex window;
+// deterministic per (seed, epoch).
+std::vector<SampleTask> dataset_tasks(const DatasetDescription& d, const std::vector<PreparedCharacter>& prepared,
+                                      const std::vector<Motion>& motions,
+                                      std::span<const std::int32_t> characters, int epoch);
 
 }  // namespace gatcore::character
