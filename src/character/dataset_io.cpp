@@ -1,4 +1,5 @@
 // The dataset description file (JSON, through nlohmann-json).
+#include <filesystem>
 #include <fstream>
 #include <random>
 
@@ -24,12 +25,36 @@ DatasetDescription describe_dataset(std::vector<std::string> characters, std::ve
   return d;
 }
 
+namespace {
+
+namespace fs = std::filesystem;
+bool is_file_entry(const std::string& e) { return e.rfind("procedural:", 0) != 0; }
+
+// File entries are stored relative to the dataset file's directory.
+std::vector<std::string> relative_to(const std::vector<std::string>& entries, const std::string& dataset) {
+  const fs::path base = fs::absolute(fs::path(dataset)).parent_path();
+  std::vector<std::string> out;
+  for (const auto& e : entries)
+    out.push_back(is_file_entry(e) ? fs::absolute(e).lexically_normal().lexically_relative(base).generic_string() : e);
+  return out;
+}
+
+std::vector<std::string> resolve(const std::vector<std::string>& entries, const std::string& dataset) {
+  const fs::path base = fs::absolute(fs::path(dataset)).parent_path();
+  std::vector<std::string> out;
+  for (const auto& e : entries)
+    out.push_back(is_file_entry(e) && fs::path(e).is_relative() ? (base / e).lexically_normal().string() : e);
+  return out;
+}
+
+}  // namespace
+
 void save_dataset(const std::string& path, const DatasetDescription& d) {
   nlohmann::json j;
   j["format"] = "gatcore-dataset";
   j["version"] = 1;
-  j["characters"] = d.characters;
-  j["motions"] = d.motions;
+  j["characters"] = relative_to(d.characters, path);  // relative to this file
+  j["motions"] = relative_to(d.motions, path);
   j["random_poses"] = d.random_poses;
   j["pose_angle"] = d.pose_angle;
   j["motion_stride"] = d.motion_stride;
@@ -58,8 +83,8 @@ DatasetDescription load_dataset(const std::string& path) {
     GATCORE_CHECK(j.value("format", "") == "gatcore-dataset", path, ": not a gatcore dataset (\"format\" is not \"gatcore-dataset\")");
     GATCORE_CHECK(j.value("version", 0) == 1, path, ": unsupported dataset version ", j.value("version", 0));
     DatasetDescription d;
-    d.characters = j.at("characters").get<std::vector<std::string>>();
-    d.motions = j.at("motions").get<std::vector<std::string>>();
+    d.characters = resolve(j.at("characters").get<std::vector<std::string>>(), path);
+    d.motions = resolve(j.at("motions").get<std::vector<std::string>>(), path);
     d.random_poses = j.at("random_poses").get<int>();
     d.pose_angle = j.at("pose_angle").get<float>();
     d.motion_stride = j.at("motion_stride").get<int>();

@@ -103,6 +103,8 @@ struct DatasetDescription {
 // Fills the split from the fractions and the seed.
 DatasetDescription describe_dataset(std::vector<std::string> characters, std::vector<std::string> motions,
                                     const DatasetDescription& settings = {});
+// File entries are written relative to the dataset file's directory and
+// resolved against it on load (procedural entries unchanged).
 void save_dataset(const std::string& path, const DatasetDescription& d);
 // Throws InvalidArgument naming the file and the field for bad files.
 DatasetDescription load_dataset(const std::string& path);
