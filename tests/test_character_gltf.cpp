@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <set>
 
 #include "character_fixtures.hpp"
@@ -176,4 +178,61 @@ TEST_CASE("glTF import of the shared real characters", "[character][gltf][data]"
     }
   }
   CHECK(loaded > 0);
+}
+
+TEST_CASE("glTF export of new weights re-imports with those weights, the rest intact", "[character][gltf][export]") {
+  const std::string src = charfix::write_temp("export_src.glb", charfix::skinned_glb());
+  const Character ch = load_gltf(src);
+  // New weights: the box goes to the (weightless) helper joint, the tube keeps its own.
+  SkinWeights w = ch.mesh.weights;
+  for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v)
+    if (ch.mesh.positions[3 * v] >= 0.5f - 1e-6f) {  // box vertices (x in [0.5, 0.6])
+      REQUIRE(w.ptr[v + 1] - w.ptr[v] == 1);
+      w.joint[w.ptr[v]] = 2;
+    }
+  for (const char* name : {"export_out.glb", "export_out.gltf"}) {
+    const auto out = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / name).string();
+    save_gltf_with_weights(src, ch, w, out);
+    const Character back = load_gltf(out);
+    INFO(out);
+    REQUIRE(back.mesh.num_vertices() == ch.mesh.num_vertices());
+    CHECK(back.mesh.positions == ch.mesh.positions);
+    CHECK(back.mesh.triangles == ch.mesh.triangles);
+    CHECK(back.skeleton.names == ch.skeleton.names);
+    CHECK(back.clips.size() == 1);
+    CHECK(back.mesh.weights.joint == w.joint);
+    REQUIRE(back.mesh.weights.weight.size() == w.weight.size());
+    for (std::size_t k = 0; k < w.weight.size(); ++k) CHECK(back.mesh.weights.weight[k] == Approx(w.weight[k]).margin(1e-6));
+    CHECK(max_abs_diff(linear_blend_skinning(back.mesh, skinning_matrices(back.skeleton, bind_pose(back.skeleton))),
+                       back.mesh.positions) < 1e-5f);
+  }
+  SkinWeights wrong;
+  CHECK_THROWS_WITH(save_gltf_with_weights(src, ch, wrong, "/tmp/x.glb"), Contains("weight rows"));
+}
+
+TEST_CASE("glTF export keeps a real character's content", "[character][gltf][export][data]") {
+  const auto dir = charfix::data_dir();
+  const auto p = dir / "characters" / "quaternius" / "modular_men" / "Farmer.glb";
+  if (dir.empty() || !std::filesystem::exists(p)) {
+    WARN("SKIPPED: data not found (" << p << ")");
+    return;
+  }
+  const Character ch = load_gltf(p.string());
+  const auto out = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "Farmer_weights.glb").string();
+  save_gltf_with_weights(p.string(), ch, ch.mesh.weights, out);
+  const Character back = load_gltf(out);
+  CHECK(back.mesh.positions == ch.mesh.positions);
+  CHECK(back.mesh.weights.joint == ch.mesh.weights.joint);
+  for (std::size_t k = 0; k < ch.mesh.weights.weight.size(); ++k)
+    CHECK(back.mesh.weights.weight[k] == Approx(ch.mesh.weights.weight[k]).margin(1e-5));
+  // Materials, images and names survive (occurrences of their JSON keys).
+  auto count = [](const std::string& file, const char* key) {
+    std::ifstream f(file, std::ios::binary);
+    const std::string s((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    std::size_t n = 0;
+    for (std::size_t at = s.find(key); at != std::string::npos; at = s.find(key, at + 1)) ++n;
+    return n;
+  };
+  for (const char* key : {"\"materials\"", "\"material\"", "\"mimeType\"", "\"name\""})
+    CHECK(count(out, key) == count(p.string(), key));
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "gatcore/character/dataset.hpp"
 #include "gatcore/character/import.hpp"
 #include "gatcore/character/motion.hpp"
 #include "gatcore/error.hpp"
@@ -75,12 +76,29 @@ void print_motion(const Motion& m) {
   }
 }
 
+void print_dataset(const std::string& path, const DatasetDescription& d) {
+  std::printf("dataset    %s\n", path.c_str());
+  std::printf("characters %zu (train %zu, validation %zu, test %zu; split by character, seed %u)\n", d.characters.size(),
+              d.split.train.size(), d.split.validation.size(), d.split.test.size(), d.seed);
+  for (std::size_t c = 0; c < d.characters.size(); ++c) {
+    const char* part = "train";
+    for (auto i : d.split.validation) part = static_cast<std::size_t>(i) == c ? "validation" : part;
+    for (auto i : d.split.test) part = static_cast<std::size_t>(i) == c ? "test" : part;
+    std::printf("  %-10s %s\n", part, d.characters[c].c_str());
+  }
+  std::printf("motions    %zu (every %d-th frame)\n", d.motions.size(), d.motion_stride);
+  for (const auto& m : d.motions) std::printf("  %s\n", m.c_str());
+  std::printf("poses      %d random per character per epoch, +-%g rad per joint axis\n", d.random_poses, d.pose_angle);
+  std::printf("reference  Delta Mush, %d iterations, step %g\n", d.delta_mush.iterations, d.delta_mush.step);
+  std::printf("subsample  %lld consecutive vertices per sample\n", static_cast<long long>(d.subsample));
+}
+
 }  // namespace
 
 int cmd_info(int argc, char** argv) {
   if (argc != 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     std::fprintf(argc == 2 ? stdout : stderr,
-                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf / .fbx / .dae) or a motion (.bvh)\n");
+                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf / .fbx / .dae) or a motion (.bvh) or a dataset (.json)\n");
     return argc == 2 ? 0 : 2;
   }
   const std::string path = argv[1];
@@ -88,11 +106,15 @@ int cmd_info(int argc, char** argv) {
     print_character(load_character(path));
     return 0;
   }
+  if (ends_with(path, ".json")) {
+    print_dataset(path, load_dataset(path));
+    return 0;
+  }
   if (ends_with(path, ".bvh")) {
     print_motion(load_bvh(path));
     return 0;
   }
-  throw gatcore::InvalidArgument(path + ": unknown file type (expected .glb, .gltf, .fbx, .dae or .bvh)");
+  throw gatcore::InvalidArgument(path + ": unknown file type (expected .glb, .gltf, .fbx, .dae, .bvh or a dataset .json)");
 }
 
 }  // namespace gat

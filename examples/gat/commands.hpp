@@ -18,5 +18,7 @@ int cmd_demo(int argc, char** argv);
 int cmd_train(int argc, char** argv);
 int cmd_eval(int argc, char** argv);
 int cmd_info(int argc, char** argv);
+int cmd_errormap(int argc, char** argv);
+int cmd_dataset(int argc, char** argv);
 
 }  // namespace gat

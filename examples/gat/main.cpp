@@ -11,7 +11,9 @@ constexpr gat::Command kCommands[] = {
     {"demo", gat::cmd_demo, "train a small DenseGATs on the embedded tube character, compare with LBS"},
     {"train", gat::cmd_train, "train a model by name (densegats, neuroskinning, ...)"},
     {"eval", gat::cmd_eval, "evaluate a checkpoint"},
-    {"info", gat::cmd_info, "print what a character (.glb/.gltf/.fbx) or motion (.bvh) file holds"},
+    {"info", gat::cmd_info, "print what a character (.glb/.gltf/.fbx/.dae), motion (.bvh) or dataset (.json) holds"},
+    {"errormap", gat::cmd_errormap, "render where LBS departs from the reference deformer (Delta Mush) as a PNG"},
+    {"dataset", gat::cmd_dataset, "build a dataset description (characters, motions, split, reference deformer)"},
 };
 
 int usage(int rc) {

@@ -103,6 +103,7 @@ Character load_assimp_character(const std::string& path, const ImportOptions& op
     sk.rest_local.push_back(to_transform(to_mat4(nodes[n]->mTransformation)));
     sk.root_parent.push_back(p >= 0 && !in_skel[p] ? global[p] : mat4_identity());
     sk.inverse_bind.push_back(inverse(global[n]));
+    ch.joint_nodes.push_back(n);  // preorder index of the assimp node
   }
   std::vector<char> has_ibm(static_cast<std::size_t>(sk.num_joints()), 0);
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gatcore/character/parallel.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -46,7 +47,7 @@ std::vector<float> linear_blend_skinning(const Mesh& mesh, std::span<const Mat4>
   std::vector<float> out(static_cast<std::size_t>(3 * n));
   const auto& W = mesh.weights;
   const float* P = mesh.positions.data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float m[12] = {};
     for (std::int64_t k = W.ptr[v]; k < W.ptr[v + 1]; ++k) {
@@ -68,7 +69,7 @@ std::vector<float> dual_quaternion_skinning(const Mesh& mesh, std::span<const Ma
   std::vector<float> out(static_cast<std::size_t>(3 * n));
   const auto& W = mesh.weights;
   const float* P = mesh.positions.data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     // Pivot: the strongest influence; others are flipped into its hemisphere.
     std::int64_t pivot = W.ptr[v];
@@ -124,7 +125,7 @@ std::vector<float> vertex_normals(std::span<const float> positions, std::span<co
     }
   }
   std::vector<float> out(static_cast<std::size_t>(3 * n), 0.0f);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     const double l = std::sqrt(acc[3 * v] * acc[3 * v] + acc[3 * v + 1] * acc[3 * v + 1] + acc[3 * v + 2] * acc[3 * v + 2]);
     if (l > 0.0)
@@ -140,7 +141,7 @@ std::vector<float> smooth(const DeltaMush& dm, std::span<const float> x0) {
   const std::int64_t n = static_cast<std::int64_t>(a.size() / 3);
   const float s = dm.params.step;
   for (int it = 0; it < dm.params.iterations; ++it) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
     for (std::int64_t v = 0; v < n; ++v) {
       const std::int64_t k0 = dm.adj_ptr[v], k1 = dm.adj_ptr[v + 1];
       if (k0 == k1) {
@@ -207,7 +208,7 @@ DeltaMush delta_mush_bind(const Mesh& mesh, const DeltaMushParams& params) {
   const std::vector<float> s = smooth(dm, mesh.positions);
   const std::vector<float> sn = vertex_normals(s, mesh.triangles);
   dm.deltas.resize(static_cast<std::size_t>(3 * n));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float d[3], f[3][3];
     for (int c = 0; c < 3; ++c) d[c] = mesh.positions[3 * v + c] - s[3 * v + c];
@@ -227,7 +228,7 @@ std::vector<float> delta_mush_apply(const DeltaMush& dm, std::span<const float> 
   const std::vector<float> s = smooth(dm, posed);
   const std::vector<float> sn = vertex_normals(s, dm.triangles);
   std::vector<float> out(static_cast<std::size_t>(3 * n));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float f[3][3];
     const float* d = &dm.deltas[3 * v];

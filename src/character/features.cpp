@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "gatcore/character/deform.hpp"
+#include "gatcore/character/parallel.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -76,7 +77,7 @@ Vec3 apply_normalisation(const NormalisationStats& s, const Vec3& p) {
 std::vector<float> apply_normalisation(const NormalisationStats& s, std::span<const float> positions) {
   std::vector<float> out(positions.size());
   const std::int64_t n = static_cast<std::int64_t>(positions.size() / 3);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     const Vec3 r = apply_normalisation(s, {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]});
     for (int c = 0; c < 3; ++c) out[3 * v + c] = r[c];
@@ -87,7 +88,7 @@ std::vector<float> apply_normalisation(const NormalisationStats& s, std::span<co
 std::vector<float> normalise_bind_positions(const NormalisationStats& s, std::span<const float> positions) {
   std::vector<float> out(positions.size());
   const std::int64_t n = static_cast<std::int64_t>(positions.size() / 3);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     const Vec3 r = apply_normalisation(
         s, transform_point(s.bind_to_world, {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]}));
@@ -114,7 +115,7 @@ Tensor densegats_features(std::span<const float> pos, std::span<const float> nrm
   check_vertex_arrays(pos, nrm, "densegats_features");
   const std::int64_t n = static_cast<std::int64_t>(pos.size() / 3), J = static_cast<std::int64_t>(joints.size());
   Tensor x = Tensor::empty(n, 6 + J);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float* r = x.row(v);
     for (int c = 0; c < 3; ++c) {
@@ -142,7 +143,7 @@ Tensor neuroskinning_features(std::span<const float> pos, std::span<const float>
     if (parents[j] >= 0) children[parents[j]].push_back(static_cast<std::int32_t>(j));
   }
   Tensor x = Tensor::empty(n, 6 + J);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float* r = x.row(v);
     for (int c = 0; c < 3; ++c) {

@@ -290,6 +290,7 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
     sk.rest_local.push_back(node_local(model.nodes[n]));
     sk.root_parent.push_back(p >= 0 && !in_skel[p] ? node_global[p] : mat4_identity());
     sk.inverse_bind.push_back(Mat4{});
+    ch.joint_nodes.push_back(n);
   }
   std::vector<char> has_ibm(J, 0);
   std::vector<std::vector<int>> skin_joint(model.skins.size());  // skin-local -> skeleton joint

@@ -27,6 +27,7 @@ struct Character {
   Skeleton skeleton;
   std::vector<std::int32_t> welded_from_file;  // [file vertices] -> welded vertex id
   std::vector<SourcePrimitive> primitives;
+  std::vector<std::int32_t> joint_nodes;  // [joints] the file node of each joint (-1: none)
   std::vector<Clip> clips;
 
   std::int64_t num_file_vertices() const { return static_cast<std::int64_t>(welded_from_file.size()); }

@@ -23,4 +23,15 @@ struct GltfImportOptions {
 // missing joints, and non-finite data.
 Character load_gltf(const std::string& path, const GltfImportOptions& opt = {});
 
+// Writes the glTF file `source_path` (from which `ch` was loaded) to
+// `out_path` (.glb: binary, .gltf: JSON with embedded buffers) with every
+// skinned primitive's JOINTS_0 / WEIGHTS_0 replaced by `weights` (one row
+// per welded vertex of `ch`, skeleton joint ids; each file vertex takes its
+// welded vertex's 4 largest weights, renormalised). Joints missing from a
+// primitive's skin are appended to it (with their inverse bind matrices).
+// Everything else in the file (nodes, materials, images, animations, other
+// attributes) is kept; the old weight accessors stay, unused.
+void save_gltf_with_weights(const std::string& source_path, const Character& ch, const SkinWeights& weights,
+                            const std::string& out_path);
+
 }  // namespace gatcore::character

@@ -1,0 +1,122 @@
+#pragma once
+// Training samples for the two models, generated on the fly, and the
+// train / validation / test split by character.
+//
+// A PreparedCharacter holds what every sample of one character shares: the
+// character re-expressed in its world bind frame (so Delta Mush deltas and
+// features are in world units), its normalisation, the Delta Mush binding
+// (its parameters are the dataset's reference-deformer record) and the mesh
+// graph. Samples are in normalised coordinates (NormalisationStats).
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <span>
+#include <vector>
+
+#include "gatcore/character/character.hpp"
+#include "gatcore/character/deform.hpp"
+#include "gatcore/character/features.hpp"
+#include "gatcore/character/motion.hpp"
+#include "gatcore/graph.hpp"
+#include "gatcore/tensor.hpp"
+
+namespace gatcore::character {
+
+// The character with bind_to_world applied: positions in the world frame,
+// inverse bind matrices compensated, so skinning the world bind pose gives
+// the world rest mesh.
+Character to_world(const Character& ch, const Mat4& bind_to_world);
+
+struct PreparedCharacter {
+  Character character;  // world frame (to_world)
+  NormalisationStats norm;  // of the world-frame character (bind_to_world = identity)
+  DeltaMush delta_mush;
+  CsrGraph mesh_graph;  // mesh edges + self-loops
+  Pose rest;            // bind pose of the world-frame character
+};
+PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {});
+
+struct DenseGatsSample {
+  Tensor features;  // [m, 6 + J]: posed position, posed normal, distance to each joint (normalised)
+  Tensor target;    // [m, 3]: Delta Mush - LBS displacement (normalised units)
+  Tensor lbs;       // [m, 3]: LBS positions (normalised)
+  CsrGraph graph;   // subgraph of the mesh graph induced by `vertices`
+  std::vector<std::int32_t> vertices;
+  std::int32_t character = -1, pose = -1;
+};
+
+// One pose of one character; `count` consecutive vertices from `first`
+// (count <= 0 or >= n: the whole mesh). Normals and Delta Mush are computed
+// on the whole mesh, then restricted.
+DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
+                                      std::int64_t count);
+
+struct NeuroSkinningSample {
+  Tensor features;  // [m, 6 + J]: rest position, rest normal, distance to each bone segment (normalised)
+  Tensor weights;   // [m, J] ground-truth skin weights
+  CsrGraph graph;
+  std::vector<std::int32_t> vertices;
+  std::int32_t character = -1;
+};
+// `vertices` empty: the whole mesh.
+NeuroSkinningSample make_neuroskinning_sample(const PreparedCharacter& pc, std::span<const std::int32_t> vertices = {});
+
+struct Split {
+  std::vector<std::int32_t> train, validation, test;  // character indices
+};
+// Shuffles characters with `seed` (std::mt19937 integers, portable) and cuts
+// off round(fraction * n) for validation and test (at least one each when
+// the fraction is positive and n >= 3). Never splits a character's poses.
+Split split_by_character(std::int32_t num_characters, float validation, float test, std::uint32_t seed);
+
+struct SampleTask {
+  std::int32_t character = 0, pose_index = 0;
+  Pose pose;
+  std::int64_t first = 0, count = 0;
+};
+// Generates the samples of `tasks` in a oneTBB pipeline (at most `tokens` in
+// flight, computed in parallel, handed to `sink` in task order on the calling
+// thread's pipeline) so a trainer consuming them keeps being fed. OpenMP is
+// disabled inside the pipeline's tasks (SerialRegion).
+void stream_densegats_samples(const std::vector<PreparedCharacter>& characters, const std::vector<SampleTask>& tasks,
+                              const std::function<void(DenseGatsSample&&)>& sink, int tokens = 4);
+
+}  // namespace gatcore::character
+
+namespace gatcore::character {
+
+// What `gat dataset build` writes (JSON): the sources and every setting the
+// samples depend on, so a trainer regenerates identical samples on the fly.
+struct DatasetDescription {
+  std::vector<std::string> characters;  // file paths, or "procedural:humanoid:SEED" / "procedural:creature:SEED"
+  std::vector<std::string> motions;     // BVH files, retargeted onto every character (CMU joint names)
+  int random_poses = 32;                // per character per epoch
+  float pose_angle = 0.5f;              // uniform_limits(+-pose_angle) around the bind pose
+  int motion_stride = 4;                // every k-th motion frame
+  std::uint32_t seed = 0;
+  DeltaMushParams delta_mush;           // the reference deformer's parameters
+  std::int64_t subsample = 1000;        // DenseGATs: consecutive vertices per sample (<= 0: whole mesh)
+  float validation = 0.1f, test = 0.1f;
+  Split split;                          // by character, from seed
+};
+
+// Fills the split from the fractions and the seed.
+DatasetDescription describe_dataset(std::vector<std::string> characters, std::vector<std::string> motions,
+                                    const DatasetDescription& settings = {});
+// File entries are written relative to the dataset file's directory and
+// resolved against it on load (procedural entries unchanged).
+void save_dataset(const std::string& path, const DatasetDescription& d);
+// Throws InvalidArgument naming the file and the field for bad files.
+DatasetDescription load_dataset(const std::string& path);
+// A character by its dataset entry (a file, or a procedural spec).
+Character load_dataset_character(const std::string& entry);
+
+// The DenseGATs tasks of one epoch for the given characters (indices into
+// d.characters; `prepared` and `motions` are the loaded ones, all of them):
+// random poses and strided motion frames, each with a random vertex window;
+// deterministic per (seed, epoch).
+std::vector<SampleTask> dataset_tasks(const DatasetDescription& d, const std::vector<PreparedCharacter>& prepared,
+                                      const std::vector<Motion>& motions,
+                                      std::span<const std::int32_t> characters, int epoch);
+
+}  // namespace gatcore::character
