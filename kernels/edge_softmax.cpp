@@ -15,23 +15,8 @@ struct SmArgs {
 };
 }  // namespace gatcore::cpu::attn
 
-#define ATTN_OPS88 0
-namespace gatcore::cpu::attn::isa_scalar {
-#include "kernels/attn_softmax_impl.inc"
-}
-#undef ATTN_OPS88
-#define ATTN_OPS88 1
-ATTN_BEGIN_AVX2
-namespace gatcore::cpu::attn::isa_avx2 {
-#include "kernels/attn_softmax_impl.inc"
-}
-ATTN_END
-ATTN_BEGIN_AVX512
-namespace gatcore::cpu::attn::isa_avx512 {
-#include "kernels/attn_softmax_impl.inc"
-}
-ATTN_END
-#undef ATTN_OPS88
+#define ATTN_IMPL "kernels/attn_softmax_impl.inc"
+#include "kernels/attn_instantiate.inc"
 
 namespace gatcore::cpu {
 using namespace attn;
