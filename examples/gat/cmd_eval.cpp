@@ -1,13 +1,16 @@
 // `gat eval`: loads a checkpoint and reports its loss and errors on held-out
-// samples of the embedded tube data (the character pipeline's datasets will
-// slot in here as --data).
+// samples: the test characters of a dataset (--data, or the dataset the
+// checkpoint was trained on) or the embedded tube data.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
+#include "gatcore/character/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "tube_data.hpp"
 
@@ -18,23 +21,28 @@ namespace {
 
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
-               "usage: gat eval --model FILE [--samples N] [--seed S]\n"
+               "usage: gat eval --model FILE [--samples N] [--seed S] [--data DATASET] [--part P]\n"
                "  Evaluates a checkpoint written by gat train on N held-out samples (default 16) of the\n"
                "  embedded tube data (seed S, default 12345; not the training seeds): loss, and per-vertex\n"
                "  error (displacements, in mesh units) or L1 weight error / bone precision and recall\n"
-               "  (skin weights, top-k post-processed).\n");
+               "  (skin weights, top-k post-processed).\n"
+               "  --data DATASET  evaluate on a dataset's characters instead (default: the dataset the\n"
+               "                  checkpoint was trained on, if any); displacement: N poses per character\n"
+               "  --part P        test (default), validation or train characters of the dataset\n");
   return rc;
 }
 
 }  // namespace
 
 int gat::cmd_eval(int argc, char** argv) {
-  std::string path;
+  std::string path, data, part = "test";
   long samples = 16, seed = 12345;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
     if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help")) return usage(0);
     if (!std::strcmp(argv[i], "--model") && v) path = argv[++i];
+    else if (!std::strcmp(argv[i], "--data") && v) data = argv[++i];
+    else if (!std::strcmp(argv[i], "--part") && v) part = argv[++i];
     else if (!std::strcmp(argv[i], "--samples") && v) samples = std::strtol(argv[++i], nullptr, 10);
     else if (!std::strcmp(argv[i], "--seed") && v) seed = std::strtol(argv[++i], nullptr, 10);
     else {
@@ -53,17 +61,53 @@ int gat::cmd_eval(int argc, char** argv) {
   LoadedModel l = load_checkpoint(path);
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
-  GATCORE_CHECK(cfg.in_dim == demo::kTubeFeatures, "model '", path, "' takes ", cfg.in_dim,
-                " features; the embedded tube data has ", demo::kTubeFeatures);
-  const auto data = demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed));
+  if (part != "test" && part != "validation" && part != "train") {
+    std::fprintf(stderr, "gat eval: --part expects test, validation or train, got '%s'\n", part.c_str());
+    return 2;
+  }
+  const auto& md = l.file.metadata;
+  if (data.empty() && md.count("data_path")) data = md.at("data_path");
+  std::vector<Sample> samples_;
+  if (!data.empty()) {
+    const character::TrainingData td = character::load_training_data(data);
+    if (md.count("data_hash") && md.at("data_hash") != td.hash && md.count("data_path") && md.at("data_path") == data)
+      std::fprintf(stderr, "gat eval: warning: %s has changed since %s was trained on it\n", data.c_str(), path.c_str());
+    const std::string bones = character::joined_bone_names(td.super);
+    if (md.count("data_path") && md.count("skeleton") && md.at("skeleton") != bones) {
+      std::fprintf(stderr, "gat eval: %s's super skeleton (%s) differs from the checkpoint's (%s)\n", data.c_str(),
+                   bones.c_str(), md.at("skeleton").c_str());
+      return 2;
+    }
+    GATCORE_CHECK(cfg.in_dim == td.feature_dim() && (cfg.task != Task::weights || cfg.out_dim == td.super.num_bones()),
+                  "model '", path, "' takes ", cfg.in_dim, " features / ", cfg.out_dim, " outputs; dataset ", data,
+                  " has ", td.feature_dim(), " features over ", td.super.num_bones(), " bones");
+    const auto p = part == "test" ? character::DatasetPart::test
+                   : part == "validation" ? character::DatasetPart::validation : character::DatasetPart::train;
+    int k = 1;
+    for (int j : m.pool_sizes()) k = std::max(k, j);
+    samples_ = character::training_samples(td, cfg.task, p, 0, k, int(samples));
+    if (samples_.empty()) {
+      std::fprintf(stderr, "gat eval: %s has no %s characters\n", data.c_str(), part.c_str());
+      return 2;
+    }
+  } else {
+    GATCORE_CHECK(cfg.in_dim == demo::kTubeFeatures, "model '", path, "' takes ", cfg.in_dim,
+                  " features; the embedded tube data has ", demo::kTubeFeatures);
+    samples_ = demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed));
+  }
+  const auto& data_ = samples_;
   m.fold_batch_norm();
   Trainer t(m, TrainOptions{}, l.norm);
-  std::printf("gat eval: %s (%s) from %s on %ld held-out tube samples\n", cfg.name.c_str(), task_name(cfg.task),
-              path.c_str(), samples);
-  std::printf("  loss (%s, normalised targets): %.6f\n", cfg.task == Task::weights ? "KL" : "MSE", t.evaluate(data));
+  if (data.empty())
+    std::printf("gat eval: %s (%s) from %s on %ld held-out tube samples\n", cfg.name.c_str(), task_name(cfg.task),
+                path.c_str(), samples);
+  else
+    std::printf("gat eval: %s (%s) from %s on %zu samples of the %s characters of %s\n", cfg.name.c_str(),
+                task_name(cfg.task), path.c_str(), data_.size(), part.c_str(), data.c_str());
+  std::printf("  loss (%s, normalised targets): %.6f\n", cfg.task == Task::weights ? "KL" : "MSE", t.evaluate(data_));
   double err = 0, maxerr = 0, base = 0;
   std::int64_t count = 0, tp = 0, fp = 0, fn = 0;
-  for (const Sample& s : data) {
+  for (const Sample& s : data_) {
     Tensor y = predict(m, s, l.norm, cfg.task == Task::weights ? cfg.top_k : 0);
     for (std::int64_t i = 0; i < y.rows(); ++i, ++count) {
       double e = 0, b = 0;

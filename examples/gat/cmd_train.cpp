@@ -1,7 +1,8 @@
 // `gat train`: trains any model of issue 3 by name, with a progress line,
 // validation every epoch, a resumable checkpoint every epoch and Ctrl-C
-// handling. Until the character pipeline's datasets exist (--data), it
-// trains on the embedded tube character (tube_data.hpp).
+// handling. It trains on a dataset of the character pipeline (--data, see
+// character/training_data.hpp) or on the embedded tube character
+// (tube_data.hpp).
 #include <unistd.h>
 
 #include <chrono>
@@ -10,11 +11,16 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include <omp.h>
 
 #include "commands.hpp"
+#include "gatcore/character/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "tube_data.hpp"
 
@@ -49,8 +55,10 @@ int usage(int rc) {
                "  --threads T    OpenMP threads (default: all cores)\n"
                "  --batch B      characters per batch (default: paper, 8 or 12)\n"
                "  --lr LR        initial learning rate (default 1e-3)\n"
-               "  --samples N    training samples of the embedded data (default 64; 8 more validate)\n"
-               "  --data DATASET a dataset of the character pipeline (not available yet)\n"
+               "  --samples N    training samples of the embedded data (default 64; 8 more validate);\n"
+               "                 with --data: poses per character and epoch (default: all of the dataset's)\n"
+               "  --data DATASET a dataset written by gat dataset build: trains on its training characters,\n"
+               "                 validates on its validation characters (bones: the dataset's super skeleton)\n"
                "  Without --data the embedded tube character is used: displacement models learn the\n"
                "  correction of LBS in random bend/twist poses; skin-weight models learn the\n"
                "  two-bone weights of tubes of varying resolution.\n");
@@ -80,6 +88,7 @@ std::string hms(double s) {
 int gat::cmd_train(int argc, char** argv) {
   std::string model_name = "densegats", out = "model.gcm", resume, data, task;
   long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
+  bool samples_set = false;
   float lr = 1e-3f;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
@@ -100,7 +109,7 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--seed") && v) { if (!parse_long(a, argv[++i], 0, 2147483647L, seed)) return 2; }
     else if (!std::strcmp(a, "--threads") && v) { if (!parse_long(a, argv[++i], 1, 1024, threads)) return 2; }
     else if (!std::strcmp(a, "--batch") && v) { if (!parse_long(a, argv[++i], 1, 4096, batch)) return 2; }
-    else if (!std::strcmp(a, "--samples") && v) { if (!parse_long(a, argv[++i], 1, 1000000, samples)) return 2; }
+    else if (!std::strcmp(a, "--samples") && v) { if (!parse_long(a, argv[++i], 1, 1000000, samples)) return 2; samples_set = true; }
     else if (!std::strcmp(a, "--lr") && v) {
       char* end = nullptr;
       lr = std::strtof(argv[++i], &end);
@@ -112,11 +121,6 @@ int gat::cmd_train(int argc, char** argv) {
       std::fprintf(stderr, "gat train: unknown or incomplete option '%s'\n", a);
       return usage(2);
     }
-  }
-  if (!data.empty()) {
-    std::fprintf(stderr, "gat train: --data: datasets come with the character pipeline (gat dataset), which this "
-                         "build does not have yet; omit --data to train on the embedded tube character\n");
-    return 2;
   }
   if (threads > 0) omp_set_num_threads(int(threads));
 
@@ -135,15 +139,58 @@ int gat::cmd_train(int argc, char** argv) {
       samples = std::stol(md.at("samples"));
       batch = std::stol(md.at("batch"));
     }
-  } else {
-    ModelConfig cfg = ModelConfig::defaults(model_name, demo::kTubeFeatures);
+    if (md.count("data_path")) {
+      if (data.empty()) data = md.at("data_path");
+    } else if (!data.empty()) {
+      std::fprintf(stderr, "gat train: %s was trained on the embedded tube data, not a dataset; drop --data\n",
+                   resume.c_str());
+      return 2;
+    }
+  }
+  std::unique_ptr<character::TrainingData> td;
+  if (!data.empty()) {
+    td = std::make_unique<character::TrainingData>(character::load_training_data(data));
+    if (resume.empty() && !samples_set) samples = 0;
+    if (!resume.empty()) {
+      const auto& md = loaded.file.metadata;
+      if (md.count("data_hash") && md.at("data_hash") != td->hash) {
+        std::fprintf(stderr, "gat train: %s has changed since %s was trained on it (hash %s, checkpoint %s)\n",
+                     data.c_str(), resume.c_str(), td->hash.c_str(), md.at("data_hash").c_str());
+        return 2;
+      }
+      if (md.count("skeleton") && md.at("skeleton") != character::joined_bone_names(td->super)) {
+        std::fprintf(stderr, "gat train: %s's super skeleton differs from the one %s was trained on\n", data.c_str(),
+                     resume.c_str());
+        return 2;
+      }
+    }
+  }
+  if (resume.empty()) {
+    const std::int64_t in_dim = td ? td->feature_dim() : demo::kTubeFeatures;
+    ModelConfig cfg = ModelConfig::defaults(model_name, in_dim);
     if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
-    cfg.out_dim = cfg.task == Task::weights ? demo::kTubeBones : 3;
+    cfg.out_dim = cfg.task == Task::weights ? (td ? td->super.num_bones() : demo::kTubeBones) : 3;
     model = make_model(cfg, std::uint64_t(seed));
   }
   const ModelConfig& cfg = model->config();
-  const auto train = demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed) * 2 + 1);
-  const auto val = demo::tube_samples(cfg.task, 8, std::uint64_t(seed) * 2 + 2);
+  if (td) {
+    GATCORE_CHECK(cfg.in_dim == td->feature_dim() && (cfg.task != Task::weights || cfg.out_dim == td->super.num_bones()),
+                  "model '", resume, "' takes ", cfg.in_dim, " features / ", cfg.out_dim, " outputs; dataset ", data,
+                  " has ", td->feature_dim(), " features over ", td->super.num_bones(), " bones");
+  }
+  int geodesic_k = 1;
+  for (int k : model->pool_sizes()) geodesic_k = std::max(geodesic_k, k);
+  const auto data_samples = [&](character::DatasetPart part, int epoch) {
+    return character::training_samples(*td, cfg.task, part, epoch, geodesic_k, int(samples));
+  };
+  std::vector<Sample> train = td ? data_samples(character::DatasetPart::train, 0)
+                                 : demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed) * 2 + 1);
+  const std::vector<Sample> val = td ? data_samples(character::DatasetPart::validation, 0)
+                                     : demo::tube_samples(cfg.task, 8, std::uint64_t(seed) * 2 + 2);
+  if (train.empty()) {
+    std::fprintf(stderr, "gat train: %s has no training samples\n", data.c_str());
+    return 2;
+  }
   if (resume.empty()) norm = Normaliser::fit(train, cfg.task == Task::displacement);
   TrainOptions opt = TrainOptions::defaults_for(cfg);
   opt.seed = std::uint64_t(seed);
@@ -152,10 +199,24 @@ int gat::cmd_train(int argc, char** argv) {
   Trainer trainer(*model, opt, norm);
   if (!resume.empty()) restore_training_state(loaded.file, trainer, resume);
 
-  std::printf("gat train: %s (%s), %lld parameters, embedded tube data: %zu training / %zu validation samples, "
+  const std::string source = td ? "dataset " + data + " (" + std::to_string(td->super.num_bones()) + " bones)"
+                                : std::string("embedded tube data");
+  std::printf("gat train: %s (%s), %lld parameters, %s: %zu training / %zu validation samples, "
               "batch %d, %d threads\n",
               cfg.name.c_str(), task_name(cfg.task), static_cast<long long>(model->registry().num_parameters()),
-              train.size(), val.size(), opt.batch_size, omp_get_max_threads());
+              source.c_str(), train.size(), val.size(), opt.batch_size, omp_get_max_threads());
+  std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
+                                           {"samples", std::to_string(samples)},
+                                           {"batch", std::to_string(opt.batch_size)}};
+  if (td) {
+    extra["data"] = "dataset";
+    extra["data_path"] = std::filesystem::absolute(data).string();
+    extra["data_hash"] = td->hash;
+    extra["skeleton"] = character::joined_bone_names(td->super);
+  } else {
+    extra["data"] = "embedded tube character";
+    extra["skeleton"] = "upper_arm,forearm";
+  }
   if (trainer.epoch() >= epochs) {
     std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
     return 0;
@@ -166,6 +227,10 @@ int gat::cmd_train(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   const int first = trainer.epoch();
   while (trainer.epoch() < epochs) {
+    // Displacement datasets: the random poses and windows of this epoch
+    // (deterministic per seed and epoch, so a resumed run sees the same).
+    if (td && cfg.task == Task::displacement && trainer.epoch() > 0)
+      train = data_samples(character::DatasetPart::train, trainer.epoch());
     const auto te = std::chrono::steady_clock::now();
     const auto progress = [&](int e, std::int64_t b, std::int64_t nb, double loss) {
       if (!tty) return;
@@ -180,9 +245,7 @@ int gat::cmd_train(int argc, char** argv) {
       std::fflush(stderr);
     };
     const EpochStats st = trainer.run_epoch(train, val, progress);
-    save_checkpoint(out, *model, norm, &trainer,
-                    {{"data", "embedded tube character"}, {"skeleton", "upper_arm,forearm"}, {"seed", std::to_string(seed)},
-                     {"samples", std::to_string(samples)}, {"batch", std::to_string(opt.batch_size)}});
+    save_checkpoint(out, *model, norm, &trainer, extra);
     if (tty) std::fprintf(stderr, "\r\033[K");
     std::printf("epoch %d/%ld  train loss %.6f  val loss %.6f  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
                 epochs, st.train_loss, st.val_loss, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
