@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
 
 using namespace gatcore;
@@ -18,18 +19,19 @@ namespace {
 
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
-               "usage: gat eval --model FILE [--samples N] [--seed S]\n"
+               "usage: gat eval --model FILE [--samples N] [--seed S] [--device cpu|vulkan|auto]\n"
                "  Evaluates a checkpoint written by gat train on N held-out samples (default 16) of the\n"
                "  embedded tube data (seed S, default 12345; not the training seeds): loss, and per-vertex\n"
                "  error (displacements, in mesh units) or L1 weight error / bone precision and recall\n"
-               "  (skin weights, top-k post-processed).\n");
+               "  (skin weights, top-k post-processed).\n"
+               "  --device D  cpu (default), vulkan or auto: where the model runs (see gat train --help)\n");
   return rc;
 }
 
 }  // namespace
 
 int gat::cmd_eval(int argc, char** argv) {
-  std::string path;
+  std::string path, device = "cpu";
   long samples = 16, seed = 12345;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
@@ -37,6 +39,13 @@ int gat::cmd_eval(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--model") && v) path = argv[++i];
     else if (!std::strcmp(argv[i], "--samples") && v) samples = std::strtol(argv[++i], nullptr, 10);
     else if (!std::strcmp(argv[i], "--seed") && v) seed = std::strtol(argv[++i], nullptr, 10);
+    else if (!std::strcmp(argv[i], "--device") && v) {
+      device = argv[++i];
+      if (device != "cpu" && device != "vulkan" && device != "auto") {
+        std::fprintf(stderr, "gat eval: --device expects cpu, vulkan or auto, got '%s'\n", device.c_str());
+        return 2;
+      }
+    }
     else {
       std::fprintf(stderr, "gat eval: unknown or incomplete option '%s'\n", argv[i]);
       return usage(2);
@@ -50,16 +59,19 @@ int gat::cmd_eval(int argc, char** argv) {
     std::fprintf(stderr, "gat eval: --samples must be positive\n");
     return 2;
   }
+  const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
   LoadedModel l = load_checkpoint(path);
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
   GATCORE_CHECK(cfg.in_dim == demo::kTubeFeatures, "model '", path, "' takes ", cfg.in_dim,
                 " features; the embedded tube data has ", demo::kTubeFeatures);
   const auto data = demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed));
+  m.to(dev);
   m.fold_batch_norm();
   Trainer t(m, TrainOptions{}, l.norm);
-  std::printf("gat eval: %s (%s) from %s on %ld held-out tube samples\n", cfg.name.c_str(), task_name(cfg.task),
-              path.c_str(), samples);
+  std::printf("gat eval: %s (%s) from %s on %ld held-out tube samples, device %s\n", cfg.name.c_str(),
+              task_name(cfg.task), path.c_str(), samples,
+              dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu");
   std::printf("  loss (%s, normalised targets): %.6f\n", cfg.task == Task::weights ? "KL" : "MSE", t.evaluate(data));
   double err = 0, maxerr = 0, base = 0;
   std::int64_t count = 0, tp = 0, fp = 0, fn = 0;
