@@ -156,7 +156,7 @@ TEST_CASE("vulkan trainer: Ori.GAT trains like the CPU", "[vulkan]") {
   parity("origat");
 }
 
-TEST_CASE("vulkan trainer: checkpoints save from the device, load and resume on it; eval and predict", "[vulkan]") {
+TEST_CASE("vulkan trainer: checkpoints from the device resume on it and evaluate like the CPU", "[vulkan]") {
   if (!vkt::ready()) return;
   const ModelConfig c = reduced("densegats");
   const auto path = (std::filesystem::temp_directory_path() / "gatcore_vk_trainer.gcm").string();
