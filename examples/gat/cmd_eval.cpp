@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "gatcore/character/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
 
 using namespace gatcore;
@@ -22,20 +23,22 @@ namespace {
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
                "usage: gat eval --model FILE [--samples N] [--seed S] [--data DATASET] [--part P]\n"
+               "                [--device cpu|vulkan|auto]\n"
                "  Evaluates a checkpoint written by gat train on N held-out samples (default 16) of the\n"
                "  embedded tube data (seed S, default 12345; not the training seeds): loss, and per-vertex\n"
                "  error (displacements, in mesh units) or L1 weight error / bone precision and recall\n"
                "  (skin weights, top-k post-processed).\n"
                "  --data DATASET  evaluate on a dataset's characters instead (default: the dataset the\n"
                "                  checkpoint was trained on, if any); displacement: N poses per character\n"
-               "  --part P        test (default), validation or train characters of the dataset\n");
+               "  --part P        test (default), validation or train characters of the dataset\n"
+               "  --device D      cpu (default), vulkan or auto: where the model runs (see gat train --help)\n");
   return rc;
 }
 
 }  // namespace
 
 int gat::cmd_eval(int argc, char** argv) {
-  std::string path, data, part = "test";
+  std::string path, data, part = "test", device = "cpu";
   long samples = 16, seed = 12345;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
@@ -45,6 +48,13 @@ int gat::cmd_eval(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--part") && v) part = argv[++i];
     else if (!std::strcmp(argv[i], "--samples") && v) samples = std::strtol(argv[++i], nullptr, 10);
     else if (!std::strcmp(argv[i], "--seed") && v) seed = std::strtol(argv[++i], nullptr, 10);
+    else if (!std::strcmp(argv[i], "--device") && v) {
+      device = argv[++i];
+      if (device != "cpu" && device != "vulkan" && device != "auto") {
+        std::fprintf(stderr, "gat eval: --device expects cpu, vulkan or auto, got '%s'\n", device.c_str());
+        return 2;
+      }
+    }
     else {
       std::fprintf(stderr, "gat eval: unknown or incomplete option '%s'\n", argv[i]);
       return usage(2);
@@ -58,6 +68,7 @@ int gat::cmd_eval(int argc, char** argv) {
     std::fprintf(stderr, "gat eval: --samples must be positive\n");
     return 2;
   }
+  const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
   LoadedModel l = load_checkpoint(path);
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
@@ -96,14 +107,16 @@ int gat::cmd_eval(int argc, char** argv) {
     samples_ = demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed));
   }
   const auto& data_ = samples_;
+  m.to(dev);
   m.fold_batch_norm();
   Trainer t(m, TrainOptions{}, l.norm);
+  const std::string device_label = dev == Device::vulkan ? vulkan::current_device().name : std::string("cpu");
   if (data.empty())
-    std::printf("gat eval: %s (%s) from %s on %ld held-out tube samples\n", cfg.name.c_str(), task_name(cfg.task),
-                path.c_str(), samples);
+    std::printf("gat eval: %s (%s) from %s on %ld held-out tube samples, device %s\n", cfg.name.c_str(),
+                task_name(cfg.task), path.c_str(), samples, device_label.c_str());
   else
-    std::printf("gat eval: %s (%s) from %s on %zu samples of the %s characters of %s\n", cfg.name.c_str(),
-                task_name(cfg.task), path.c_str(), data_.size(), part.c_str(), data.c_str());
+    std::printf("gat eval: %s (%s) from %s on %zu samples of the %s characters of %s, device %s\n", cfg.name.c_str(),
+                task_name(cfg.task), path.c_str(), data_.size(), part.c_str(), data.c_str(), device_label.c_str());
   std::printf("  loss (%s, normalised targets): %.6f\n", cfg.task == Task::weights ? "KL" : "MSE", t.evaluate(data_));
   double err = 0, maxerr = 0, base = 0;
   std::int64_t count = 0, tp = 0, fp = 0, fn = 0;

@@ -22,6 +22,7 @@
 #include "commands.hpp"
 #include "gatcore/character/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
 
 using namespace gatcore;
@@ -41,6 +42,7 @@ int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
                "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
+               "                 [--device cpu|vulkan|auto]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
@@ -59,6 +61,9 @@ int usage(int rc) {
                "                 with --data: poses per character and epoch (default: all of the dataset's)\n"
                "  --data DATASET a dataset written by gat dataset build: trains on its training characters,\n"
                "                 validates on its validation characters (bones: the dataset's super skeleton)\n"
+               "  --device D     cpu (default), vulkan (the device GATCORE_VK_DEVICE selects, else the\n"
+               "                 first GPU; lavapipe needs GATCORE_VK_ALLOW_CPU=1) or auto (Vulkan when a\n"
+               "                 GPU is there, else the CPU); checkpoints are the same on every device\n"
                "  Without --data the embedded tube character is used: displacement models learn the\n"
                "  correction of LBS in random bend/twist poses; skin-weight models learn the\n"
                "  two-bone weights of tubes of varying resolution.\n");
@@ -86,7 +91,7 @@ std::string hms(double s) {
 }  // namespace
 
 int gat::cmd_train(int argc, char** argv) {
-  std::string model_name = "densegats", out = "model.gcm", resume, data, task;
+  std::string model_name = "densegats", out = "model.gcm", resume, data, task, device = "cpu";
   long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
   bool samples_set = false;
   float lr = 1e-3f;
@@ -98,6 +103,13 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--out") && v) out = argv[++i];
     else if (!std::strcmp(a, "--resume") && v) resume = argv[++i];
     else if (!std::strcmp(a, "--data") && v) data = argv[++i];
+    else if (!std::strcmp(a, "--device") && v) {
+      device = argv[++i];
+      if (device != "cpu" && device != "vulkan" && device != "auto") {
+        std::fprintf(stderr, "gat train: --device expects cpu, vulkan or auto, got '%s'\n", device.c_str());
+        return 2;
+      }
+    }
     else if (!std::strcmp(a, "--task") && v) {
       task = argv[++i];
       if (task != "weights" && task != "displacement") {
@@ -123,6 +135,7 @@ int gat::cmd_train(int argc, char** argv) {
     }
   }
   if (threads > 0) omp_set_num_threads(int(threads));
+  const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
 
   std::unique_ptr<Model> model;
   Normaliser norm;
@@ -196,15 +209,19 @@ int gat::cmd_train(int argc, char** argv) {
   opt.seed = std::uint64_t(seed);
   opt.lr = lr;
   if (batch > 0) opt.batch_size = int(batch);
+  // Parameters are drawn (or loaded) on the CPU and moved before the
+  // optimiser allocates its moments next to them.
+  model->to(dev);
   Trainer trainer(*model, opt, norm);
   if (!resume.empty()) restore_training_state(loaded.file, trainer, resume);
 
   const std::string source = td ? "dataset " + data + " (" + std::to_string(td->super.num_bones()) + " bones)"
                                 : std::string("embedded tube data");
   std::printf("gat train: %s (%s), %lld parameters, %s: %zu training / %zu validation samples, "
-              "batch %d, %d threads\n",
+              "batch %d, %d threads, device %s\n",
               cfg.name.c_str(), task_name(cfg.task), static_cast<long long>(model->registry().num_parameters()),
-              source.c_str(), train.size(), val.size(), opt.batch_size, omp_get_max_threads());
+              source.c_str(), train.size(), val.size(), opt.batch_size, omp_get_max_threads(),
+              dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu");
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
                                            {"samples", std::to_string(samples)},
                                            {"batch", std::to_string(opt.batch_size)}};

@@ -1,4 +1,5 @@
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/backend.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -302,8 +303,9 @@ void save_checkpoint(const std::string& path, const Model& model, const Normalis
   f.metadata = extra;
   f.metadata["config"] = model.config().to_text();
   f.metadata["target_scale"] = float_str(norm.target_scale);
-  for (const auto& p : model.registry().params) f.tensors.emplace_back(p.name, p.var.value());
-  for (const auto& b : model.registry().buffers) f.tensors.emplace_back(b.name, b.tensor);
+  // Downloaded first when the model lives on a device.
+  for (const auto& p : model.registry().params) f.tensors.emplace_back(p.name, to(p.var.value(), Device::cpu));
+  for (const auto& b : model.registry().buffers) f.tensors.emplace_back(b.name, to(b.tensor, Device::cpu));
   if (norm.defined()) {
     f.tensors.emplace_back("norm.mean", norm.mean);
     f.tensors.emplace_back("norm.inv_std", norm.inv_std);
@@ -313,8 +315,8 @@ void save_checkpoint(const std::string& path, const Model& model, const Normalis
     auto& t = const_cast<Trainer&>(*trainer);
     const auto& params = model.registry().params;
     for (std::size_t k = 0; k < params.size(); ++k) {
-      f.tensors.emplace_back("optim.m." + params[k].name, t.optimiser().first_moments()[k]);
-      f.tensors.emplace_back("optim.v." + params[k].name, t.optimiser().second_moments()[k]);
+      f.tensors.emplace_back("optim.m." + params[k].name, to(t.optimiser().first_moments()[k], Device::cpu));
+      f.tensors.emplace_back("optim.v." + params[k].name, to(t.optimiser().second_moments()[k], Device::cpu));
     }
     f.metadata["epoch"] = std::to_string(t.epoch());
     f.metadata["lr"] = float_str(t.optimiser().lr());
@@ -388,7 +390,8 @@ void restore_training_state(const CheckpointFile& f, Trainer& t, const std::stri
       if (!src) fail(path, "missing optimiser tensor '" + name + "': cannot resume");
       Tensor& dst = mv ? t.optimiser().second_moments()[k] : t.optimiser().first_moments()[k];
       if (!src->same_shape(dst)) fail(path, "shape mismatch for '" + name + "'");
-      dst.copy_from_(*src);
+      if (dst.device() == Device::cpu) dst.copy_from_(*src);
+      else backend(dst.device()).copy(to(*src, dst.device()), dst);  // uploaded explicitly
     }
   }
   try {

@@ -38,7 +38,7 @@ class DenseGats final : public Model {
 
   Var forward(const Batch& b, bool training) override {
     const std::int64_t n = b.x.rows();
-    Var buf = modules_[0].make_buffer(n);
+    Var buf = modules_[0].make_buffer(n, b.x.device());
     Var y(b.x);
     for (std::size_t k = 0; k < transform_.size(); ++k)
       y = transform_[k].forward(y, training, rng_,
@@ -46,7 +46,7 @@ class DenseGats final : public Model {
     for (std::size_t m = 0; m < modules_.size(); ++m) {
       y = modules_[m].forward(b.graph, buf, training);
       if (m + 1 < modules_.size()) {
-        buf = modules_[m + 1].make_buffer(n);
+        buf = modules_[m + 1].make_buffer(n, b.x.device());
         transitions_[m].forward(b.graph, y, training, nn::DenseModule::input_slot(buf, modules_[m + 1].in));
       }
     }

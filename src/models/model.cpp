@@ -1,4 +1,5 @@
 #include "gatcore/models/model.hpp"
+#include "gatcore/backend.hpp"
 
 #include <algorithm>
 #include <numeric>
@@ -36,6 +37,14 @@ Var masked_softmax(const Var& logits, const Tensor& mask) {
   if (!mask.defined() || mask.rows() == 1) return row_softmax(logits, mask);
   check_shape(mask, logits.rows(), logits.cols(), "bone mask");
   // Per-row masks: a -1e9 bias underflows exp() to exactly 0.
+  if (mask.device() != Device::cpu) {
+    // On the device: bias = 1e9·mask − 1e9 (masks are 0/1: exactly 0 or −1e9).
+    Backend& be = backend(mask.device());
+    Tensor bias = be.empty(mask.rows(), mask.cols());
+    be.fill(bias, 1.f);
+    be.axpby(1e9f, mask, -1e9f, bias, bias);
+    return row_softmax(add(logits, Var(bias)));
+  }
   Tensor bias = Tensor::empty(mask.rows(), mask.cols());
   for (std::int64_t i = 0; i < mask.rows(); ++i)
     for (std::int64_t j = 0; j < mask.cols(); ++j) bias.at(i, j) = mask.at(i, j) != 0.f ? 0.f : -1e9f;

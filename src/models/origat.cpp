@@ -5,6 +5,8 @@
 // Parameters: layers.l.{W, att_dst, att_src, b}.
 #include <cmath>
 
+#include "gatcore/backend.hpp"
+
 #include "gatcore/nn/linear.hpp"
 #include "models_impl.hpp"
 
@@ -53,7 +55,9 @@ class OriGat final : public Model {
   // z + b (b broadcast over rows) = linear(z, I, b) would cost a GEMM; use
   // matmul of a ones column instead: ones[n,1] · b[1,C].
   static Var add_bias(const Var& z, const Var& b) {
-    return add(z, matmul(Var(Tensor::full(z.rows(), 1, 1.f)), b));
+    Tensor ones = backend(z.device()).empty(z.rows(), 1);
+    backend(z.device()).fill(ones, 1.f);
+    return add(z, matmul(Var(ones), b));
   }
   std::vector<Layer> layers_;
 };

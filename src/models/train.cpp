@@ -1,4 +1,6 @@
 #include "gatcore/models/train.hpp"
+#include "gatcore/backend.hpp"
+#include "gatcore/vulkan.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -202,6 +204,23 @@ Batch make_batch(const std::vector<const Sample*>& samples, const std::vector<st
   return out;
 }
 
+void to_device(Batch& b, Device d) {
+  if (b.x.defined()) b.x = to(b.x, d);
+  if (b.target.defined()) b.target = to(b.target, d);
+  if (b.mask.defined()) b.mask = to(b.mask, d);
+}
+
+namespace {
+// A batch's graphs die with the batch; drop their device copies (the Vulkan
+// graph cache is keyed by address, which the next batch's graphs may reuse).
+void forget_graphs(const Batch& b, Device d) {
+  if (d != Device::vulkan) return;
+  if (b.graph) vulkan::forget_graph(b.graph.get());
+  for (const auto& kv : b.neighbours)
+    if (kv.second) vulkan::forget_graph(kv.second.get());
+}
+}  // namespace
+
 Trainer::Trainer(Model& model, TrainOptions opt, Normaliser norm)
     : model_(model), opt_(opt), norm_(std::move(norm)), adam_(model.parameters(), AdamOptions{opt.lr}),
       rng_(opt.seed ^ 0x5851f42d4c957f2dull) {
@@ -232,13 +251,15 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
       sel.push_back(sample_vertices(s.graph->num_nodes, opt_.sampling, opt_.sample_vertices, rng_));
     }
     Batch batch = make_batch(smp, sel, norm_, pools);
+    to_device(batch, model_.device());  // once per batch; nothing else crosses until the loss read
     Var loss = task_loss(model_.config().task, model_.forward(batch, true), batch.target);
     adam_.zero_grad();
     backward(loss);
-    const double l = loss.value().at(0, 0);
+    const double l = to(loss.value(), Device::cpu).at(0, 0);  // the step's one host read
     GATCORE_CHECK(std::isfinite(l), "training diverged at epoch ", epoch_, ", batch ", b + 1, " (loss ", l,
                   "); try a smaller learning rate");
     adam_.step();
+    forget_graphs(batch, model_.device());
     sum += l;
     st.samples += std::int64_t(smp.size());
     if (on_batch) on_batch(epoch_, b + 1, nb, l);
@@ -262,7 +283,9 @@ double Trainer::evaluate(const std::vector<Sample>& samples) {
   double sum = 0;
   for (const Sample& s : samples) {
     Batch b = make_batch({&s}, {{}}, norm_, model_.pool_sizes());
-    sum += task_loss(model_.config().task, model_.forward(b, false), b.target).value().at(0, 0);
+    to_device(b, model_.device());
+    sum += to(task_loss(model_.config().task, model_.forward(b, false), b.target).value(), Device::cpu).at(0, 0);
+    forget_graphs(b, model_.device());
   }
   return samples.empty() ? 0.0 : sum / double(samples.size());
 }
@@ -272,7 +295,9 @@ Tensor predict(Model& model, const Sample& s, const Normaliser& norm, int top_k)
   Sample copy = s;
   copy.target = Tensor{};
   Batch b = make_batch({&copy}, {{}}, norm, model.pool_sizes());
-  Tensor y = model.forward(b, false).value().clone();
+  to_device(b, model.device());
+  Tensor y = to(model.forward(b, false).value(), Device::cpu).clone();
+  forget_graphs(b, model.device());
   if (model.config().task == Task::displacement) {
     if (norm.target_scale != 1.f)
       for (std::int64_t i = 0; i < y.rows(); ++i)

@@ -1,4 +1,5 @@
 #include "gatcore/nn/dense_module.hpp"
+#include "gatcore/backend.hpp"
 
 namespace gatcore::nn {
 
@@ -13,7 +14,7 @@ DenseModule::DenseModule(const Scope& s, std::int64_t in_, int num_blocks, const
   }
 }
 
-Var DenseModule::make_buffer(std::int64_t n) const { return Var(Tensor::empty(n, buffer_width())); }
+Var DenseModule::make_buffer(std::int64_t n, Device d) const { return Var(backend(d).empty(n, buffer_width())); }
 
 Var DenseModule::forward(const GraphPtr& g, const Var& buf, bool training) {
   GATCORE_CHECK(buf.cols() == buffer_width(), "DenseModule: buffer has ", buf.cols(), " columns, expected ",

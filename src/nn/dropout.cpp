@@ -1,4 +1,5 @@
 #include "gatcore/nn/dropout.hpp"
+#include "gatcore/backend.hpp"
 
 namespace gatcore::nn {
 
@@ -9,7 +10,8 @@ Var Dropout::forward(const Var& x, bool training, Rng& rng) const {
   const float keep = 1.f / (1.f - p);
   for (std::int64_t i = 0; i < x.rows(); ++i)
     for (std::int64_t j = 0; j < x.cols(); ++j) mask.at(i, j) = rng.uniform() < p ? 0.f : keep;
-  return mul(x, Var(mask));
+  // Drawn on the host (same stream on every device), uploaded explicitly.
+  return mul(x, Var(to(mask, x.device())));
 }
 
 }  // namespace gatcore::nn

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "gatcore/backend.hpp"
+
 namespace gatcore::nn {
 
 GatBlock::GatBlock(const Scope& s, std::int64_t in, const GatBlockOptions& o, Rng& rng) : opt(o) {
@@ -20,7 +22,7 @@ Var GatBlock::forward(const GraphPtr& g, const Var& x, bool training, const Var&
   const std::int64_t kf = std::int64_t(opt.heads) * opt.head_dim;
   const std::int64_t n = x.rows();
   // Scratch [aggregation | self stream]: both streams write their slot.
-  Var both(Tensor::empty(n, kf + self_width));
+  Var both(backend(x.device()).empty(n, kf + self_width));
   gat_additive(g, linear(x, W, Var{}), att_dst, att_src, opt.slope, both.cols_slice(0, kf));
   if (self_width > 0) self.forward(x, both.cols_slice(kf, kf + self_width));
   if (!opt.batch_norm) return tanhshrink(both, into);

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "gatcore/backend.hpp"
+
 namespace gatcore::nn {
 
 GcUnit::GcUnit(const Scope& s, std::int64_t in_, const GcUnitOptions& o, Rng& rng) : opt(o), in(in_) {
@@ -10,7 +12,7 @@ GcUnit::GcUnit(const Scope& s, std::int64_t in_, const GcUnitOptions& o, Rng& rn
 
 Var GcUnit::forward(const GraphPtr& g, const GraphPtr& nbr, const Var& x) const {
   const std::int64_t c = std::int64_t(opt.heads) * opt.head_dim;
-  Var out(Tensor::empty(x.rows(), this->out()));
+  Var out(backend(x.device()).empty(x.rows(), this->out()));
   copy_into(x, out.cols_slice(0, in));
   Var conv_slot = out.cols_slice(in, in + c);
   Var att = gat_dot(g, C.forward(x), opt.heads, 1.f / std::sqrt(float(opt.head_dim)));

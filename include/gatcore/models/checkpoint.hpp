@@ -47,7 +47,10 @@ void write_checkpoint_file(const std::string& path, const CheckpointFile& f);
 CheckpointFile read_checkpoint_file(const std::string& path);
 
 // Saves the model (parameters + buffers), the normaliser and, if `trainer`
-// is given, the state to resume training.
+// is given, the state to resume training. The model may live on any device
+// (tensors are downloaded before writing). load_checkpoint returns a CPU
+// model: Model::to(d) it before building the Trainer that
+// restore_training_state fills (the Adam moments are uploaded).
 void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm,
                      const Trainer* trainer = nullptr, const std::map<std::string, std::string>& extra = {});
 

@@ -38,6 +38,11 @@ class Model {
   nn::Registry& registry() { return reg_; }
   const nn::Registry& registry() const { return reg_; }
   std::vector<Var> parameters() const { return reg_.parameters(); }
+  // Moves parameters and BatchNorm buffers to `d` (before building a Trainer:
+  // Adam allocates its moments where the parameters are).
+  void to(Device d) { reg_.to(d); }
+  // Where the parameters live.
+  Device device() const { return reg_.params.empty() ? Device::cpu : reg_.params.front().var.device(); }
 
   // Probabilities (weights task) or displacements.
   virtual Var forward(const Batch& b, bool training) = 0;

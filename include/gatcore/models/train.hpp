@@ -69,6 +69,10 @@ std::vector<std::vector<std::int32_t>> hop_neighbours(const CsrGraph& g, int k);
 Batch make_batch(const std::vector<const Sample*>& samples, const std::vector<std::vector<std::int32_t>>& selections,
                  const Normaliser& norm, const std::vector<int>& pool_sizes);
 
+// Moves the batch's features, target and mask to `d` (graphs stay: backends
+// upload them themselves).
+void to_device(Batch& b, Device d);
+
 struct EpochStats {
   int epoch = 0;
   double train_loss = 0, val_loss = -1;  // val_loss < 0: no validation set
@@ -80,6 +84,9 @@ struct EpochStats {
 // Called after every batch: (epoch, batch index, batches in epoch, loss).
 using BatchCallback = std::function<void(int, std::int64_t, std::int64_t, double)>;
 
+// Trains where the model's parameters are (Model::to before constructing the
+// Trainer): each batch is built on the host and moved to the device once;
+// the loss read is the step's only transfer back.
 class Trainer {
  public:
   Trainer(Model& model, TrainOptions opt, Normaliser norm);

@@ -20,7 +20,7 @@ struct DenseModule {
   DenseModule(const Scope& s, std::int64_t in, int num_blocks, const GatBlockOptions& opt, bool dense, Rng& rng);
   std::int64_t buffer_width() const { return in + std::int64_t(blocks.size()) * block_width; }
   std::int64_t out() const { return dense ? buffer_width() : (blocks.empty() ? in : block_width); }
-  Var make_buffer(std::int64_t n) const;                // uninitialised [n, buffer_width]
+  Var make_buffer(std::int64_t n, Device d = Device::cpu) const;  // uninitialised [n, buffer_width] on d
   static Var input_slot(const Var& buf, std::int64_t in) { return buf.cols_slice(0, in); }
   // Runs every block; returns the module output (a view of buf).
   Var forward(const GraphPtr& g, const Var& buf, bool training);

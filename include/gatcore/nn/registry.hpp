@@ -35,7 +35,15 @@ struct Registry {
   const Var* find_param(const std::string& name) const;
   const Tensor* find_buffer(const std::string& name) const;
   std::int64_t num_parameters() const;  // scalar count
+  // Moves every parameter and buffer to device `d` in place: the storages
+  // shared with the layers (Vars, BatchNorm running statistics) now hold
+  // device memory, so every holder sees the move. Gradients are dropped.
+  void to(Device d);
 };
+
+// Moves the whole storage of `t` (offset 0, contiguous) to device `d` in
+// place: every tensor sharing that storage follows.
+void move_storage(const Tensor& t, Device d);
 
 // A registry and a name prefix. sub("blocks").sub(3) -> "blocks.3.".
 struct Scope {
