@@ -116,10 +116,15 @@ Var aggregate(const GraphPtr& g, const Var& alpha, const Var& z, const Var& into
                                as = SavedTensor(alpha.value(), "alpha"), zs = SavedTensor(z.value(), "z")] {
       Tensor dy = yi->grad_if_any();
       if (!dy.defined()) return;
-      if (zi->requires_grad) be.aggregate_backward(*g, as.get(op), zs.get(op), dy, Tensor{}, zi->grad_or_zeros());
-      overwrite_grad_into(be, ai, [&](const Tensor& d_alpha) {
-        be.aggregate_backward(*g, as.get(op), zs.get(op), dy, d_alpha, Tensor{});
-      });
+      // One pass computes both gradients; d_alpha is overwritten by the
+      // kernel, so it goes through overwrite_grad_into when alpha wants one.
+      const Tensor dz = grad_for(zi);
+      if (ai->requires_grad)
+        overwrite_grad_into(be, ai, [&](const Tensor& d_alpha) {
+          be.aggregate_backward(*g, as.get(op), zs.get(op), dy, d_alpha, dz);
+        });
+      else if (dz.defined())
+        be.aggregate_backward(*g, as.get(op), zs.get(op), dy, Tensor{}, dz);
     });
   return y;
 }
