@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "gatcore/character/dataset.hpp"
+#include "gatcore/character/gltf.hpp"
 #include "gatcore/character/motion.hpp"
 #include "gatcore/error.hpp"
 
@@ -26,7 +27,33 @@ void usage(std::FILE* f) {
                "             procedural:creature:SEED\n"
                "  --random-poses N (32)  --pose-angle RAD (0.5)  --motion-stride K (4)  --seed S (0)\n"
                "  --subsample M (1000)   --validation F (0.1)    --test F (0.1)\n"
-               "  --dm-iterations I (10) --dm-step S (0.5)       --skip-bad (skip unreadable characters)\n");
+               "  --dm-iterations I (10) --dm-step S (0.5)       --skip-bad (skip unreadable characters)\n"
+               "usage: gat dataset export-character CHARACTER -o OUT.glb\n"
+               "  writes a dataset character (e.g. procedural:humanoid:5) as a skinned glTF file\n");
+}
+
+// `gat dataset export-character ENTRY -o OUT.glb`: procedural characters as
+// files, so predict-weights / deform / other tools can take them.
+int export_character(int argc, char** argv) {
+  std::string entry, out;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-o" && i + 1 < argc) out = argv[++i];
+    else if (!a.empty() && a[0] != '-' && entry.empty()) entry = a;
+    else throw gatcore::InvalidArgument("export-character: unknown or extra argument '" + a + "'");
+  }
+  if (entry.empty() || out.empty()) {
+    usage(stderr);
+    return 2;
+  }
+  const std::string ext = std::filesystem::path(out).extension().string();
+  if (ext != ".glb" && ext != ".gltf") throw gatcore::InvalidArgument(out + ": the output must be a .glb or .gltf file");
+  const Character c = load_dataset_character(entry);
+  save_gltf_character(c, out);
+  std::printf("%s: %lld vertices, %lld triangles, %d joints -> %s\n", entry.c_str(),
+              static_cast<long long>(c.mesh.num_vertices()), static_cast<long long>(c.mesh.num_triangles()),
+              c.skeleton.num_joints(), out.c_str());
+  return 0;
 }
 
 }  // namespace
@@ -36,7 +63,10 @@ int cmd_dataset(int argc, char** argv) {
     usage(argc < 2 ? stderr : stdout);
     return argc < 2 ? 2 : 0;
   }
-  if (std::string(argv[1]) != "build") throw gatcore::InvalidArgument(std::string("unknown dataset action '") + argv[1] + "' (expected build)");
+  if (std::string(argv[1]) == "export-character") return export_character(argc, argv);
+  if (std::string(argv[1]) != "build")
+    throw gatcore::InvalidArgument(std::string("unknown dataset action '") + argv[1] +
+                                   "' (expected build or export-character)");
   DatasetDescription s;
   std::string out;
   std::vector<std::string> inputs, motions;

@@ -20,6 +20,7 @@
 #include <omp.h>
 
 #include "commands.hpp"
+#include "gatcore/character/loss_curve.hpp"
 #include "gatcore/character/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
@@ -27,6 +28,7 @@
 
 using namespace gatcore;
 using namespace gatcore::models;
+using gatcore::character::LossRecord;
 
 namespace {
 
@@ -42,7 +44,7 @@ int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
                "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
-               "                 [--device cpu|vulkan|auto]\n"
+               "                 [--device cpu|vulkan|auto] [--loss-curve FILE.png]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
@@ -64,6 +66,8 @@ int usage(int rc) {
                "  --device D     cpu (default), vulkan (the device GATCORE_VK_DEVICE selects, else the\n"
                "                 first GPU; lavapipe needs GATCORE_VK_ALLOW_CPU=1) or auto (Vulkan when a\n"
                "                 GPU is there, else the CPU); checkpoints are the same on every device\n"
+               "  --loss-curve F the loss curve picture, rewritten after every epoch (default: the checkpoint's\n"
+               "                 path with .loss.png for its extension); the losses also go to F's .csv\n"
                "  Without --data the embedded tube character is used: displacement models learn the\n"
                "  correction of LBS in random bend/twist poses; skin-weight models learn the\n"
                "  two-bone weights of tubes of varying resolution.\n");
@@ -91,7 +95,7 @@ std::string hms(double s) {
 }  // namespace
 
 int gat::cmd_train(int argc, char** argv) {
-  std::string model_name = "densegats", out = "model.gcm", resume, data, task, device = "cpu";
+  std::string model_name = "densegats", out = "model.gcm", resume, data, task, device = "cpu", curve;
   long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
   bool samples_set = false;
   float lr = 1e-3f;
@@ -103,6 +107,7 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--out") && v) out = argv[++i];
     else if (!std::strcmp(a, "--resume") && v) resume = argv[++i];
     else if (!std::strcmp(a, "--data") && v) data = argv[++i];
+    else if (!std::strcmp(a, "--loss-curve") && v) curve = argv[++i];
     else if (!std::strcmp(a, "--device") && v) {
       device = argv[++i];
       if (device != "cpu" && device != "vulkan" && device != "auto") {
@@ -225,6 +230,9 @@ int gat::cmd_train(int argc, char** argv) {
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
                                            {"samples", std::to_string(samples)},
                                            {"batch", std::to_string(opt.batch_size)}};
+  // The node features a character command (predict-weights, deform) must
+  // compute for this model (character_model.hpp).
+  extra["features"] = td ? (cfg.task == Task::weights ? "neuroskinning" : "densegats") : "tube";
   if (td) {
     extra["data"] = "dataset";
     extra["data_path"] = std::filesystem::absolute(data).string();
@@ -233,6 +241,12 @@ int gat::cmd_train(int argc, char** argv) {
   } else {
     extra["data"] = "embedded tube character";
     extra["skeleton"] = "upper_arm,forearm";
+  }
+  if (curve.empty()) curve = gatcore::character::default_curve_path(out);
+  std::vector<LossRecord> history;
+  if (!resume.empty() && loaded.file.metadata.count("loss_history")) {
+    history = gatcore::character::parse_history(loaded.file.metadata.at("loss_history"), resume);
+    std::erase_if(history, [&](const LossRecord& r) { return r.epoch > trainer.epoch(); });
   }
   if (trainer.epoch() >= epochs) {
     std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
@@ -262,7 +276,10 @@ int gat::cmd_train(int argc, char** argv) {
       std::fflush(stderr);
     };
     const EpochStats st = trainer.run_epoch(train, val, progress);
+    history.push_back({st.epoch, st.train_loss, st.val_loss, double(st.lr), st.seconds});
+    extra["loss_history"] = gatcore::character::format_history(history);
     save_checkpoint(out, *model, norm, &trainer, extra);
+    gatcore::character::write_loss_outputs(history, curve);
     if (tty) std::fprintf(stderr, "\r\033[K");
     std::printf("epoch %d/%ld  train loss %.6f  val loss %.6f  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
                 epochs, st.train_loss, st.val_loss, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
@@ -274,7 +291,8 @@ int gat::cmd_train(int argc, char** argv) {
       return 130;
     }
   }
-  std::printf("trained %ld epochs in %s; model written to %s\n", epochs - first,
-              hms(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()).c_str(), out.c_str());
+  std::printf("trained %ld epochs in %s; model written to %s, loss curve to %s (+ %s)\n", epochs - first,
+              hms(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()).c_str(), out.c_str(),
+              curve.c_str(), gatcore::character::history_csv_path(curve).c_str());
   return 0;
 }

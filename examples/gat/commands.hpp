@@ -20,5 +20,7 @@ int cmd_eval(int argc, char** argv);
 int cmd_info(int argc, char** argv);
 int cmd_errormap(int argc, char** argv);
 int cmd_dataset(int argc, char** argv);
+int cmd_predict_weights(int argc, char** argv);
+int cmd_deform(int argc, char** argv);
 
 }  // namespace gat

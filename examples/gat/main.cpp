@@ -14,6 +14,8 @@ constexpr gat::Command kCommands[] = {
     {"info", gat::cmd_info, "print what a character (.glb/.gltf/.fbx/.dae), motion (.bvh) or dataset (.json) holds"},
     {"errormap", gat::cmd_errormap, "render where LBS departs from the reference deformer (Delta Mush) as a PNG"},
     {"dataset", gat::cmd_dataset, "build a dataset description (characters, motions, split, reference deformer)"},
+    {"predict-weights", gat::cmd_predict_weights, "skin weights for a character from a NeuroSkinning-family model"},
+    {"deform", gat::cmd_deform, "a motion on a character with DenseGATs corrections, baked as morph targets / .pc2"},
 };
 
 int usage(int rc) {

@@ -12,6 +12,7 @@
 #include <tiny_gltf.h>
 
 #include "gatcore/error.hpp"
+#include "src/character/gltf_util.hpp"
 #include "src/character/weld.hpp"
 
 namespace gatcore::character {
@@ -447,5 +448,15 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
   }
   return ch;
 }
+
+namespace gltf_util {
+
+std::vector<float> read_floats(const tinygltf::Model& m, int accessor, int comps, const std::string& what,
+                               const std::string& file) {
+  const Reader rd{m, file};
+  return rd.floats(accessor, comps, what);
+}
+
+}  // namespace gltf_util
 
 }  // namespace gatcore::character

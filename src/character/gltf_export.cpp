@@ -4,64 +4,30 @@
 #include <cstring>
 #include <map>
 
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#include <tiny_gltf.h>
-
 #include "gatcore/character/gltf.hpp"
 #include "gatcore/error.hpp"
+#include "src/character/gltf_util.hpp"
 
 namespace gatcore::character {
 
-namespace {
-
-int append(tinygltf::Model& m, const void* data, std::size_t bytes, int ctype, int type, std::size_t count) {
-  auto& buf = m.buffers[0].data;
-  while (buf.size() % 4) buf.push_back(0);
-  tinygltf::BufferView v;
-  v.buffer = 0;
-  v.byteOffset = buf.size();
-  v.byteLength = bytes;
-  const auto* p = static_cast<const unsigned char*>(data);
-  buf.insert(buf.end(), p, p + bytes);
-  m.bufferViews.push_back(v);
-  tinygltf::Accessor a;
-  a.bufferView = static_cast<int>(m.bufferViews.size()) - 1;
-  a.componentType = ctype;
-  a.type = type;
-  a.count = count;
-  m.accessors.push_back(a);
-  return static_cast<int>(m.accessors.size()) - 1;
-}
-
-}  // namespace
+using gltf_util::append_accessor;
 
 void save_gltf_with_weights(const std::string& source_path, const Character& ch, const SkinWeights& weights,
-                            const std::string& out_path) {
+                            const std::string& out_path, int max_influences) {
+  GATCORE_CHECK(max_influences >= 1 && max_influences <= 64, out_path, ": max_influences must be in [1, 64], got ",
+                max_influences);
+  // Influences are written in sets of 4 (JOINTS_n / WEIGHTS_n).
+  const int sets = (max_influences + 3) / 4, K = 4 * sets;
   const std::int64_t nw = ch.mesh.num_vertices();
   GATCORE_CHECK(weights.num_vertices() == nw, out_path, ": ", weights.num_vertices(), " weight rows for ", nw,
                 " vertices");
   const std::int32_t J = ch.skeleton.num_joints();
   GATCORE_CHECK(static_cast<std::int32_t>(ch.joint_nodes.size()) == J, out_path,
                 ": the character has no file node per joint (not loaded from a glTF file)");
-  tinygltf::Model model;
-  tinygltf::TinyGLTF gltf;
-  gltf.SetImageLoader(
-      [](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
-        return true;
-      },
-      nullptr);
-  std::string err, warn;
-  const auto is_glb = [](const std::string& p) {
-    return p.size() >= 4 && (p.compare(p.size() - 4, 4, ".glb") == 0 || p.compare(p.size() - 4, 4, ".GLB") == 0);
-  };
-  const bool ok = is_glb(source_path) ? gltf.LoadBinaryFromFile(&model, &err, &warn, source_path)
-                                      : gltf.LoadASCIIFromFile(&model, &err, &warn, source_path);
-  GATCORE_CHECK(ok, source_path, ": cannot re-read the source file: ", err);
-  if (model.buffers.empty()) model.buffers.emplace_back();
-  // Per welded vertex: its 4 largest weights, renormalised.
-  std::vector<std::array<std::pair<int, float>, 4>> top(static_cast<std::size_t>(nw));
+  tinygltf::Model model = gltf_util::read_model(source_path);
+  // Per welded vertex: its max_influences largest weights, renormalised
+  // (padded with zero weights to a multiple of 4).
+  std::vector<std::vector<std::pair<int, float>>> top(static_cast<std::size_t>(nw));
   for (std::int64_t v = 0; v < nw; ++v) {
     std::vector<std::pair<float, int>> l;
     for (std::int64_t k = weights.ptr[v]; k < weights.ptr[v + 1]; ++k) {
@@ -71,11 +37,12 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
       if (weights.weight[k] > 0.0f) l.push_back({weights.weight[k], weights.joint[k]});
     }
     std::sort(l.begin(), l.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    l.resize(std::min<std::size_t>(l.size(), 4));
+    l.resize(std::min<std::size_t>(l.size(), static_cast<std::size_t>(max_influences)));
     float sum = 0.0f;
     for (const auto& e : l) sum += e.first;
     GATCORE_CHECK(sum > 0.0f, out_path, ": vertex ", v, " has no positive weight");
-    for (std::size_t k = 0; k < 4; ++k) top[v][k] = k < l.size() ? std::pair{l[k].second, l[k].first / sum} : std::pair{0, 0.0f};
+    top[v].assign(static_cast<std::size_t>(K), std::pair{0, 0.0f});
+    for (std::size_t k = 0; k < l.size(); ++k) top[v][k] = {l[k].second, l[k].first / sum};
   }
   std::map<int, int> new_ibm;  // skin -> accessor, rewritten once per skin
   for (const SourcePrimitive& sp : ch.primitives) {
@@ -90,11 +57,11 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
       for (std::int32_t j = 0; j < J; ++j)
         if (ch.joint_nodes[j] == skin.joints[k]) slot.emplace(j, static_cast<int>(k));
     const std::size_t before = skin.joints.size();
-    std::vector<std::uint16_t> jv(4 * sp.num_vertices);
-    std::vector<float> wv(4 * sp.num_vertices);
+    std::vector<std::uint16_t> jv(K * sp.num_vertices);
+    std::vector<float> wv(K * sp.num_vertices);
     for (std::int64_t i = 0; i < sp.num_vertices; ++i) {
       const auto& t = top[ch.welded_from_file[sp.first_vertex + i]];
-      for (int k = 0; k < 4; ++k) {
+      for (int k = 0; k < K; ++k) {
         int s = 0;
         if (t[k].second > 0.0f) {
           auto it = slot.find(t[k].first);
@@ -105,8 +72,8 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
           s = it->second;
         }
         GATCORE_CHECK(s < 65536, out_path, ": more than 65536 joints in a skin");
-        jv[4 * i + k] = static_cast<std::uint16_t>(s);
-        wv[4 * i + k] = t[k].second;
+        jv[K * i + k] = static_cast<std::uint16_t>(s);
+        wv[K * i + k] = t[k].second;
       }
     }
     if (skin.joints.size() != before || (skin.inverseBindMatrices < 0 && !new_ibm.count(skin_id))) {
@@ -118,22 +85,35 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
         const Mat4 m = j >= 0 ? ch.skeleton.inverse_bind[j] : mat4_identity();
         std::copy(m.begin(), m.end(), ibm.begin() + 16 * k);
       }
-      skin.inverseBindMatrices = append(model, ibm.data(), ibm.size() * 4, TINYGLTF_COMPONENT_TYPE_FLOAT,
+      skin.inverseBindMatrices = append_accessor(model, ibm.data(), ibm.size() * 4, TINYGLTF_COMPONENT_TYPE_FLOAT,
                                         TINYGLTF_TYPE_MAT4, skin.joints.size());
       new_ibm[skin_id] = skin.inverseBindMatrices;
     }
     auto& prim = model.meshes[sp.mesh].primitives.at(static_cast<std::size_t>(sp.primitive));
-    for (int set = 1; prim.attributes.count("JOINTS_" + std::to_string(set)); ++set) {
+    for (int set = 0; prim.attributes.count("JOINTS_" + std::to_string(set)) ||
+                      prim.attributes.count("WEIGHTS_" + std::to_string(set));
+         ++set) {
       prim.attributes.erase("JOINTS_" + std::to_string(set));
       prim.attributes.erase("WEIGHTS_" + std::to_string(set));
     }
-    prim.attributes["JOINTS_0"] = append(model, jv.data(), jv.size() * 2, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
-                                         TINYGLTF_TYPE_VEC4, static_cast<std::size_t>(sp.num_vertices));
-    prim.attributes["WEIGHTS_0"] = append(model, wv.data(), wv.size() * 4, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                          TINYGLTF_TYPE_VEC4, static_cast<std::size_t>(sp.num_vertices));
+    // Set s holds influences [4s, 4s + 4) of every vertex.
+    for (int set = 0; set < sets; ++set) {
+      std::vector<std::uint16_t> js(4 * sp.num_vertices);
+      std::vector<float> ws(4 * sp.num_vertices);
+      for (std::int64_t i = 0; i < sp.num_vertices; ++i)
+        for (int k = 0; k < 4; ++k) {
+          js[4 * i + k] = jv[K * i + 4 * set + k];
+          ws[4 * i + k] = wv[K * i + 4 * set + k];
+        }
+      prim.attributes["JOINTS_" + std::to_string(set)] =
+          append_accessor(model, js.data(), js.size() * 2, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4,
+                          static_cast<std::size_t>(sp.num_vertices));
+      prim.attributes["WEIGHTS_" + std::to_string(set)] =
+          append_accessor(model, ws.data(), ws.size() * 4, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4,
+                          static_cast<std::size_t>(sp.num_vertices));
+    }
   }
-  GATCORE_CHECK(gltf.WriteGltfSceneToFile(&model, out_path, true, true, false, is_glb(out_path)), out_path,
-                ": cannot write the file");
+  gltf_util::write_model_atomic(model, out_path);
 }
 
 }  // namespace gatcore::character

@@ -25,13 +25,22 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt = {});
 
 // Writes the glTF file `source_path` (from which `ch` was loaded) to
 // `out_path` (.glb: binary, .gltf: JSON with embedded buffers) with every
-// skinned primitive's JOINTS_0 / WEIGHTS_0 replaced by `weights` (one row
+// skinned primitive's JOINTS_n / WEIGHTS_n replaced by `weights` (one row
 // per welded vertex of `ch`, skeleton joint ids; each file vertex takes its
-// welded vertex's 4 largest weights, renormalised). Joints missing from a
-// primitive's skin are appended to it (with their inverse bind matrices).
+// welded vertex's `max_influences` largest weights, renormalised, written in
+// sets of 4: JOINTS_0/WEIGHTS_0, JOINTS_1/WEIGHTS_1, ...). Joints missing from
+// a primitive's skin are appended to it (with their inverse bind matrices).
 // Everything else in the file (nodes, materials, images, animations, other
-// attributes) is kept; the old weight accessors stay, unused.
+// attributes) is kept; the old weight accessors stay, unused. The write is
+// atomic (temp file + rename).
 void save_gltf_with_weights(const std::string& source_path, const Character& ch, const SkinWeights& weights,
-                            const std::string& out_path);
+                            const std::string& out_path, int max_influences = 4);
+
+// Writes a character held only in memory (e.g. procedural_character) as a
+// new glTF file: one mesh node with the welded mesh (POSITION, NORMAL,
+// JOINTS_n / WEIGHTS_n), one node per joint with its rest transform (a root's
+// non-identity root_parent becomes a parent node), one skin with the inverse
+// bind matrices. load_gltf reads it back as the same character. Atomic.
+void save_gltf_character(const Character& ch, const std::string& out_path);
 
 }  // namespace gatcore::character

@@ -1,0 +1,105 @@
+// `gat predict-weights MODEL in.glb -o out.glb [--max-influences K]`: skin
+// weights for a character from a trained NeuroSkinning-family checkpoint,
+// written into a copy of the file with everything else kept.
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
+#include <omp.h>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "gatcore/character/gltf.hpp"
+#include "gatcore/character/weight_prediction.hpp"
+#include "gatcore/error.hpp"
+
+using namespace gatcore;
+using namespace gatcore::character;
+
+namespace gat {
+
+namespace {
+
+void usage(std::FILE* f) {
+  std::fprintf(f,
+               "usage: gat predict-weights MODEL CHARACTER.glb -o OUT.glb [--max-influences K] [--alias JOINT=BONE ...]\n"
+               "                           [--device cpu|vulkan|auto] [--threads T]\n"
+               "  Predicts skin weights for CHARACTER (.glb/.gltf) with a skin-weight checkpoint (neuroskinning,\n"
+               "  neuroskinning-nopool, pointnet, fc; trained with gat train --data) and writes the file again\n"
+               "  with the new weights, everything else kept. The model's bones are matched to the character's\n"
+               "  joints by normalised name (\"LeftArm\" = \"Arm.L\" = \"arm.l\"); joints without a match get no weight.\n"
+               "  --max-influences K  bones kept per vertex, renormalised (default 4, what engines expect; more\n"
+               "                      are written as JOINTS_1/WEIGHTS_1, ...)\n"
+               "  --alias JOINT=BONE  treat the character's joint JOINT as the model's bone BONE (repeatable)\n"
+               "  --device D          where the model runs (cpu default; see gat train --help)\n");
+}
+
+}  // namespace
+
+int cmd_predict_weights(int argc, char** argv) {
+  std::string model_path, in, out, device = "cpu";
+  long k = 4, threads = 0;
+  BoneAliases aliases;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw InvalidArgument(a + " expects a value");
+      return argv[++i];
+    };
+    if (a == "-h" || a == "--help") {
+      usage(stdout);
+      return 0;
+    } else if (a == "-o") {
+      out = value();
+    } else if (a == "--max-influences") {
+      k = parse_int(a, value(), 1, 64);
+    } else if (a == "--alias") {
+      add_alias(aliases, value());
+    } else if (a == "--device") {
+      device = value();
+    } else if (a == "--threads") {
+      threads = parse_int(a, value(), 1, 1024);
+    } else if (!a.empty() && a[0] != '-' && model_path.empty()) {
+      model_path = a;
+    } else if (!a.empty() && a[0] != '-' && in.empty()) {
+      in = a;
+    } else {
+      throw InvalidArgument("unknown or extra argument '" + a + "'");
+    }
+  }
+  if (model_path.empty() || in.empty() || out.empty()) {
+    usage(stderr);
+    return 2;
+  }
+  GATCORE_CHECK(is_gltf_path(in), in, ": predict-weights reads glTF characters (.glb / .gltf)");
+  GATCORE_CHECK(is_gltf_path(out), out, ": the output must be a .glb or .gltf file");
+  if (threads > 0) omp_set_num_threads(int(threads));
+  const Device dev = device_from_flag(device, "predict-weights");
+  models::LoadedModel lm = models::load_checkpoint(model_path);
+  const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::weights);
+  const Character ch = load_gltf(in);
+  lm.model->to(dev);
+  lm.model->fold_batch_norm();
+  const WeightPrediction p = predict_skin_weights(*lm.model, lm.norm, bones, ch, int(k), aliases);
+  save_gltf_with_weights(in, ch, p.weights, out, int(k));
+
+  std::printf("gat predict-weights: %s (%s, %zu bones) on %s, device %s\n", lm.model->config().name.c_str(),
+              model_path.c_str(), bones.size(), in.c_str(), device_label(dev).c_str());
+  std::printf("  %lld vertices welded (%lld in the file), %d joints: %d matched to the model's bones",
+              static_cast<long long>(ch.mesh.num_vertices()), static_cast<long long>(ch.num_file_vertices()),
+              ch.skeleton.num_joints(), p.mapping.num_mapped());
+  if (!p.mapping.unmapped.empty()) {
+    std::string names;
+    for (std::size_t j = 0; j < p.mapping.unmapped.size() && j < 8; ++j) names += (j ? ", " : "") + p.mapping.unmapped[j];
+    std::printf(", %zu without a bone get no weight (%s%s)", p.mapping.unmapped.size(), names.c_str(),
+                p.mapping.unmapped.size() > 8 ? ", ..." : "");
+  }
+  std::printf("\n  influences per vertex: mean %.2f, max %lld (limit %ld)\n",
+              double(p.weights.joint.size()) / double(std::max<std::int64_t>(1, p.weights.num_vertices())),
+              static_cast<long long>(p.weights.max_influences()), k);
+  std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
+              out.c_str());
+  return 0;
+}
+
+}  // namespace gat

@@ -1,0 +1,413 @@
+// Predictions back into files: save_gltf_character, predicted skin weights
+// (predict_skin_weights + save_gltf_with_weights), DenseGATs corrections baked
+// as glTF morph targets (save_gltf_morph_animation) and point caches.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <tiny_gltf.h>
+
+#include "character_fixtures.hpp"
+#include "gatcore/character/bake.hpp"
+#include "gatcore/character/corrective.hpp"
+#include "gatcore/character/deform.hpp"
+#include "gatcore/character/gltf.hpp"
+#include "gatcore/character/import.hpp"
+#include "gatcore/character/motion.hpp"
+#include "gatcore/character/procedural.hpp"
+#include "gatcore/character/weight_prediction.hpp"
+#include "gatcore/error.hpp"
+#include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
+#include "vulkan_test_util.hpp"
+
+using namespace gatcore;
+using namespace gatcore::character;
+using Catch::Matchers::Contains;
+
+namespace {
+
+std::string tmp(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "gatcore_export_tests";
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+// A small procedural humanoid written as .glb and read back (joint nodes,
+// primitives, weld map as for any file).
+std::string humanoid_glb(std::uint32_t seed) {
+  ProceduralOptions o;
+  o.seed = seed;
+  o.ring_segments = 8;
+  o.rings_per_bone = 3;
+  const std::string p = tmp("humanoid_" + std::to_string(seed) + ".glb");
+  save_gltf_character(procedural_character(o), p);
+  return p;
+}
+
+std::vector<std::string> bone_names(const Skeleton& s, const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> b;
+  for (const auto& n : s.names) b.push_back(normalise_bone_name(n));
+  b.insert(b.end(), extra.begin(), extra.end());
+  return b;
+}
+
+// Small models of the two tasks, fresh weights (the plumbing, not the
+// quality, is under test), with a normaliser fitted on one sample.
+std::unique_ptr<models::Model> small_model(const std::string& name, std::int64_t bones) {
+  models::ModelConfig cfg = models::ModelConfig::defaults(name, 6 + bones, name == "densegats" ? 3 : bones);
+  if (name == "densegats") cfg.modules = 1, cfg.blocks = 2, cfg.head = {32};
+  else cfg.stage1 = {16}, cfg.gc_dims = {8, 8, 8}, cfg.global_mlp = {32}, cfg.classifier = {32}, cfg.gc_pool = {4, 6, 8};
+  return models::make_model(cfg, 3);
+}
+
+models::Normaliser fit_norm(const Tensor& features, bool displacement) {
+  models::Sample s;
+  s.features = features;
+  s.target = Tensor::zeros(features.rows(), 3);
+  for (std::int64_t i = 0; i < s.target.rows(); ++i) s.target.at(i, 0) = 0.01f * float(i % 7);
+  return models::Normaliser::fit({s}, displacement);
+}
+
+std::string slurp(const std::string& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+tinygltf::Model read_gltf(const std::string& p) {
+  tinygltf::Model m;
+  tinygltf::TinyGLTF g;
+  std::string err, warn;
+  REQUIRE(g.LoadBinaryFromFile(&m, &err, &warn, p));
+  return m;
+}
+
+// Accessor `a` as floats (tightly packed float accessors, as gatcore writes them).
+std::vector<float> floats(const tinygltf::Model& m, int a) {
+  const auto& acc = m.accessors.at(std::size_t(a));
+  const auto& v = m.bufferViews.at(std::size_t(acc.bufferView));
+  REQUIRE(acc.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT);
+  const std::size_t n = acc.count * std::size_t(tinygltf::GetNumComponentsInType(std::uint32_t(acc.type)));
+  REQUIRE((v.byteStride == 0 || v.byteStride == n / acc.count * 4));
+  std::vector<float> out(n);
+  std::memcpy(out.data(), m.buffers[std::size_t(v.buffer)].data.data() + v.byteOffset + acc.byteOffset, 4 * n);
+  return out;
+}
+
+float max_abs_diff(const std::vector<float>& a, const std::vector<float>& b) {
+  REQUIRE(a.size() == b.size());
+  float d = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::abs(a[i] - b[i]));
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("save_gltf_character writes a character load_gltf reads back", "[character][export]") {
+  ProceduralOptions o;
+  o.seed = 2;
+  o.kind = ProceduralKind::creature;
+  const Character ch = procedural_character(o);
+  const std::string p = tmp("creature.glb");
+  save_gltf_character(ch, p);
+  const Character back = load_gltf(p);
+  // The importer orders joints depth first and welds coincident vertices:
+  // compare through joint names and the weld map.
+  REQUIRE(back.skeleton.num_joints() == ch.skeleton.num_joints());
+  std::vector<std::int32_t> to_back(ch.skeleton.names.size());
+  for (std::size_t j = 0; j < to_back.size(); ++j) {
+    to_back[j] = back.skeleton.find(ch.skeleton.names[j]);
+    REQUIRE(to_back[j] >= 0);
+    const std::int32_t p = ch.skeleton.parents[j];
+    CHECK(back.skeleton.parents[std::size_t(to_back[j])] == (p < 0 ? -1 : to_back[std::size_t(p)]));
+  }
+  REQUIRE(back.num_file_vertices() == ch.mesh.num_vertices());
+  CHECK(back.mesh.num_triangles() == ch.mesh.num_triangles());
+  const std::vector<float> dense = back.mesh.weights.dense(back.skeleton.num_joints());
+  const auto J = std::size_t(back.skeleton.num_joints());
+  for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) {
+    const auto w = std::size_t(back.welded_from_file[std::size_t(v)]);
+    for (int c = 0; c < 3; ++c) CHECK(back.mesh.positions[3 * w + c] == ch.mesh.positions[3 * v + c]);
+    // Coincident vertices are averaged on import; the generator gives them equal weights.
+    for (std::int64_t k = ch.mesh.weights.ptr[v]; k < ch.mesh.weights.ptr[v + 1]; ++k)
+      CHECK(dense[w * J + std::size_t(to_back[std::size_t(ch.mesh.weights.joint[k])])] ==
+            Approx(ch.mesh.weights.weight[k]).margin(1e-6));
+  }
+  // The bind pose of the file reproduces the mesh (inverse bind matrices and nodes agree).
+  CHECK(max_abs_diff(linear_blend_skinning(back.mesh, skinning_matrices(back.skeleton, rest_pose(back.skeleton))),
+                     back.mesh.positions) < 1e-4f);
+  CHECK(!std::filesystem::exists(p + ".tmp"));
+  CHECK_THROWS_WITH(save_gltf_character(ch, tmp("no_such_dir/x.glb")), Contains("x.glb"));
+  CHECK(!std::filesystem::exists(tmp("no_such_dir/x.glb.tmp")));
+}
+
+TEST_CASE("predicted skin weights go back into the file and re-import", "[character][export][weights]") {
+  // The tube fixture: a UV seam (welded vertices), two primitives, a weightless
+  // helper joint, an animation. The model also knows a bone the tube lacks.
+  const std::string src = charfix::write_temp("export_tube.glb", charfix::skinned_glb());
+  const Character ch = load_gltf(src);
+  REQUIRE(ch.num_file_vertices() > ch.mesh.num_vertices());  // the seam was welded
+  const std::vector<std::string> bones = bone_names(ch.skeleton, {"tail"});
+  const auto B = std::int64_t(bones.size());
+  auto model = small_model("neuroskinning", B);
+  const PreparedCharacter pc = prepare_character(ch);
+  const BoneMapping map = map_bones(ch.skeleton, bones, {}, "tube");
+  CHECK(map.num_mapped() == ch.skeleton.num_joints());
+  CHECK(map.bone_to_joint.back() == -1);
+  const models::Normaliser norm = fit_norm(features_in_bone_order(make_neuroskinning_sample(pc).features, map), false);
+
+  for (int K : {2, 6}) {
+    INFO("max influences " << K);
+    const WeightPrediction p = predict_skin_weights(*model, norm, bones, ch, K);
+    REQUIRE(p.weights.num_vertices() == ch.mesh.num_vertices());
+    for (std::int64_t v = 0; v < p.weights.num_vertices(); ++v) {
+      const std::int64_t n = p.weights.ptr[v + 1] - p.weights.ptr[v];
+      CHECK((n >= 1 && n <= std::min<std::int64_t>(K, ch.skeleton.num_joints())));
+      double sum = 0;
+      for (std::int64_t k = p.weights.ptr[v]; k < p.weights.ptr[v + 1]; ++k) sum += p.weights.weight[k];
+      CHECK(sum == Approx(1.0).margin(1e-5));
+    }
+    const std::string out = tmp("tube_weights_" + std::to_string(K) + ".glb");
+    save_gltf_with_weights(src, ch, p.weights, out, K);
+    CHECK(!std::filesystem::exists(out + ".tmp"));
+    const Character back = load_gltf(out);
+    CHECK(back.num_file_vertices() == ch.num_file_vertices());
+    CHECK(back.welded_from_file == ch.welded_from_file);
+    CHECK(back.mesh.positions == ch.mesh.positions);
+    CHECK(back.mesh.triangles == ch.mesh.triangles);
+    CHECK(back.skeleton.names == ch.skeleton.names);
+    CHECK(back.clips.size() == ch.clips.size());
+    CHECK(back.mesh.weights.joint == p.weights.joint);
+    REQUIRE(back.mesh.weights.weight.size() == p.weights.weight.size());
+    for (std::size_t k = 0; k < p.weights.weight.size(); ++k)
+      CHECK(back.mesh.weights.weight[k] == Approx(p.weights.weight[k]).margin(1e-6));
+    // More than 4 influences: a second set of attributes.
+    const tinygltf::Model m = read_gltf(out);
+    const auto& attrs = m.meshes.at(0).primitives.at(0).attributes;
+    CHECK(attrs.count("JOINTS_1") == (K > 4 ? 1u : 0u));
+    CHECK(attrs.count("WEIGHTS_1") == (K > 4 ? 1u : 0u));
+    CHECK(m.animations.size() == read_gltf(src).animations.size());
+    CHECK(m.nodes.size() == read_gltf(src).nodes.size());
+  }
+}
+
+TEST_CASE("checkpoints and characters that do not fit predict-weights / deform", "[character][export][errors]") {
+  const std::string src = humanoid_glb(5);
+  const Character ch = load_gltf(src);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  const auto B = std::int64_t(bones.size());
+  const std::string joined = [&] {
+    std::string s;
+    for (const auto& b : bones) s += (s.empty() ? "" : ",") + b;
+    return s;
+  }();
+  models::Normaliser norm;
+  norm.mean = Tensor::zeros(1, 6 + B);
+  norm.inv_std = Tensor::full(1, 6 + B, 1.f);
+  const std::string dg = tmp("dg.gcm"), ns = tmp("ns.gcm"), tube = tmp("tube.gcm"), old = tmp("old_ns.gcm");
+  models::save_checkpoint(dg, *small_model("densegats", B), norm, nullptr, {{"features", "densegats"}, {"skeleton", joined}});
+  models::save_checkpoint(ns, *small_model("neuroskinning", B), norm, nullptr,
+                          {{"features", "neuroskinning"}, {"skeleton", joined}});
+  models::save_checkpoint(tube, *small_model("neuroskinning", B), norm, nullptr, {{"skeleton", joined}});
+  // Written before the "features" key existed: a dataset model is recognised by its data_path.
+  models::save_checkpoint(old, *small_model("neuroskinning", B), norm, nullptr,
+                          {{"data_path", "/somewhere/data.json"}, {"skeleton", joined}});
+
+  CHECK_THROWS_WITH(character_model_bones(models::load_checkpoint(dg), dg, models::Task::weights),
+                    Contains("dg.gcm") && Contains("densegats model for displacement"));
+  CHECK_THROWS_WITH(character_model_bones(models::load_checkpoint(ns), ns, models::Task::displacement),
+                    Contains("ns.gcm") && Contains("not one for displacement"));
+  CHECK_THROWS_WITH(character_model_bones(models::load_checkpoint(tube), tube, models::Task::weights),
+                    Contains("embedded tube"));
+  CHECK(character_model_bones(models::load_checkpoint(old), old, models::Task::weights) == bones);
+  CHECK(character_model_bones(models::load_checkpoint(ns), ns, models::Task::weights) == bones);
+  CHECK(character_model_bones(models::load_checkpoint(dg), dg, models::Task::displacement) == bones);
+  CHECK_THROWS_WITH(models::load_checkpoint(tmp("missing.gcm")), Contains("missing.gcm"));
+
+  // Joints that match no bone, and two joints on one bone.
+  Skeleton odd = ch.skeleton;
+  for (auto& n : odd.names) n = "xx_" + n + "_yy";
+  CHECK_THROWS_WITH(map_bones(odd, bones, {}, "odd.glb"), Contains("odd.glb") && Contains("none of its 19 joints"));
+  BoneAliases alias;
+  alias.pairs = {{normalise_bone_name(odd.names[0]), bones[0]}};
+  CHECK(map_bones(odd, bones, alias, "odd.glb").num_mapped() == 1);
+  Skeleton twice = ch.skeleton;
+  twice.names[1] = "hips";
+  CHECK_THROWS_WITH(map_bones(twice, bones, {}, "twice.glb"), Contains("both map to bone 'hips'"));
+
+  // The wrong model for the task.
+  auto dgm = small_model("densegats", B);
+  CHECK_THROWS_WITH(predict_skin_weights(*dgm, norm, bones, ch), Contains("not skin weights"));
+  auto nsm = small_model("neuroskinning", B);
+  const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
+  CHECK_THROWS_WITH(deform_frame(d, *nsm, norm, d.prepared.rest), Contains("not displacements"));
+}
+
+TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f; .pc2 holds the same",
+          "[character][export][deform]") {
+  const std::string src = humanoid_glb(7);
+  const Character ch = load_gltf(src);
+  const std::vector<std::string> bones = bone_names(ch.skeleton, {"tail"});
+  auto model = small_model("densegats", std::int64_t(bones.size()));
+  model->fold_batch_norm();
+  const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
+  const Motion motion = load_bvh(std::string(GATCORE_SOURCE_DIR) + "/examples/data/swing.bvh");
+  const Clip clip = retarget(motion, d.prepared.character.skeleton, mat4_identity());
+  REQUIRE(clip.frames.size() >= 4);
+  const models::Normaliser norm =
+      fit_norm(features_in_bone_order(make_densegats_sample(d.prepared, clip.frames[0], 0, 0).features, d.mapping), true);
+
+  BakedFrames baked;
+  baked.fps = clip.fps;
+  const float height = 1.0f / d.prepared.norm.scale;
+  for (int f = 0; f < 4; ++f) {
+    const Pose& pose = clip.frames[std::size_t(f)];
+    const CorrectedFrame cf = deform_frame(d, *model, norm, pose);
+    // LBS, computed independently on the file's own (bind-space) character.
+    CHECK(max_abs_diff(cf.lbs, linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, pose))) < 1e-5f * height);
+    // The correction is the model's prediction, back in character units.
+    DenseGatsSample ds = make_densegats_sample(d.prepared, pose, 0, 0);
+    models::Sample s;
+    s.features = features_in_bone_order(ds.features, d.mapping);
+    s.graph = share(std::move(ds.graph));
+    const Tensor y = models::predict(*model, s, norm);
+    float corr = 0;
+    for (std::int64_t v = 0; v < y.rows(); ++v)
+      for (int c = 0; c < 3; ++c) {
+        const float want = y.at(v, c) * height;
+        CHECK(cf.corrected[3 * v + c] - cf.lbs[3 * v + c] == Approx(want).margin(1e-5f * height));
+        corr = std::max(corr, std::abs(want));
+      }
+    CHECK(corr > 0.0f);
+    baked.positions.push_back(cf.corrected);
+  }
+
+  const std::string out = tmp("deformed.glb"), pc2 = tmp("deformed.pc2");
+  save_gltf_morph_animation(src, ch, baked, out);
+  PointCache cache;
+  cache.num_points = std::int32_t(ch.num_file_vertices());
+  cache.start_frame = 0;
+  for (const auto& p : baked.positions) cache.samples.push_back(file_vertex_positions(ch, p));
+  write_point_cache(pc2, cache);
+
+  // The morph targets: base + target f = the corrected positions of frame f.
+  const tinygltf::Model m = read_gltf(out);
+  const auto& prim = m.meshes.at(0).primitives.at(0);
+  REQUIRE(prim.targets.size() == 4);
+  const std::vector<float> base = floats(m, prim.attributes.at("POSITION"));
+  for (int f = 0; f < 4; ++f) {
+    std::vector<float> shown = floats(m, prim.targets[std::size_t(f)].at("POSITION"));
+    for (std::size_t i = 0; i < shown.size(); ++i) shown[i] += base[i];
+    CHECK(max_abs_diff(shown, file_vertex_positions(ch, baked.positions[std::size_t(f)])) < 1e-5f * height);
+  }
+  // The animation steps the weights: at key f only target f is on.
+  REQUIRE(m.animations.size() == 1);
+  const auto& anim = m.animations[0];
+  CHECK(anim.name == "deform");
+  bool found = false;
+  for (const auto& c : anim.channels) {
+    if (c.target_path != "weights") continue;
+    found = true;
+    const auto& smp = anim.samplers.at(std::size_t(c.sampler));
+    CHECK(smp.interpolation == "STEP");
+    const std::vector<float> t = floats(m, smp.input), w = floats(m, smp.output);
+    REQUIRE(t.size() == 5);
+    REQUIRE(w.size() == 5 * 4);
+    for (int k = 0; k < 5; ++k) {
+      CHECK(t[std::size_t(k)] == Approx(k / clip.fps));
+      for (int f = 0; f < 4; ++f) CHECK(w[std::size_t(4 * k + f)] == (f == std::min(k, 3) ? 1.f : 0.f));
+    }
+  }
+  CHECK(found);
+  // Re-import: still the same skinned character, and its "deform" clip holds
+  // the joints at the bind pose, so skinning leaves the base mesh in place.
+  const Character back = load_gltf(out);
+  CHECK(back.mesh.positions == ch.mesh.positions);
+  CHECK(back.mesh.weights.joint == ch.mesh.weights.joint);
+  REQUIRE(back.clips.size() == 1);
+  CHECK(max_abs_diff(linear_blend_skinning(back.mesh, skinning_matrices(back.skeleton, back.clips[0].frames.at(2))),
+                     back.mesh.positions) < 1e-5f * height);
+  // Another importer reads it too.
+  CHECK(load_assimp_character(out).num_file_vertices() == ch.num_file_vertices());
+
+  // The point cache: header and positions.
+  const std::string bytes = slurp(pc2);
+  REQUIRE(bytes.size() == 32 + 4 * 12 * std::size_t(ch.num_file_vertices()));
+  CHECK(std::memcmp(bytes.data(), "POINTCACHE2\0", 12) == 0);
+  std::int32_t hdr[2];
+  std::memcpy(hdr, bytes.data() + 12, 8);
+  CHECK(hdr[0] == 1);
+  CHECK(hdr[1] == ch.num_file_vertices());
+  const PointCache rc = read_point_cache(pc2);
+  CHECK(rc.sample_rate == 1.0f);
+  REQUIRE(rc.samples.size() == 4);
+  for (int f = 0; f < 4; ++f) CHECK(rc.samples[std::size_t(f)] == cache.samples[std::size_t(f)]);
+}
+
+TEST_CASE("bake and point cache errors leave no file behind", "[character][export][errors]") {
+  const std::string src = humanoid_glb(5);
+  const Character ch = load_gltf(src);
+  const std::string out = tmp("never.glb");
+  std::filesystem::remove(out);
+  BakedFrames none;
+  CHECK_THROWS_WITH(save_gltf_morph_animation(src, ch, none, out), Contains("never.glb") && Contains("no frames"));
+  BakedFrames bad;
+  bad.positions.push_back(ch.mesh.positions);
+  bad.positions[0][5] = std::nanf("");
+  CHECK_THROWS_WITH(save_gltf_morph_animation(src, ch, bad, out), Contains("frame 0 vertex 1 is not finite"));
+  bad.positions[0].resize(6);
+  CHECK_THROWS_WITH(save_gltf_morph_animation(src, ch, bad, out), Contains("2 positions for"));
+  CHECK_THROWS_WITH(save_gltf_morph_animation(tmp("missing.glb"), ch, BakedFrames{"d", 30.f, {ch.mesh.positions}}, out),
+                    Contains("missing.glb"));
+  CHECK(!std::filesystem::exists(out));
+  CHECK_THROWS_WITH(save_gltf_morph_animation(src, ch, BakedFrames{"d", 30.f, {ch.mesh.positions}}, tmp("nodir/o.glb")),
+                    Contains("o.glb"));
+  CHECK(!std::filesystem::exists(tmp("nodir/o.glb.tmp")));
+
+  PointCache pc;
+  CHECK_THROWS_WITH(write_point_cache(tmp("e.pc2"), pc), Contains("e.pc2"));
+  pc.num_points = 2;
+  pc.samples = {{0, 0, 0, 1, 1}};
+  CHECK_THROWS_WITH(write_point_cache(tmp("e.pc2"), pc), Contains("sample 0 has 5 floats for 2 points"));
+  CHECK(!std::filesystem::exists(tmp("e.pc2")));
+  charfix::write_temp("bad.pc2", "POINTCACHE2");
+  CHECK_THROWS_WITH(read_point_cache(charfix::write_temp("bad.pc2", "POINTCACHE2")), Contains("bad.pc2") && Contains("truncated"));
+  CHECK_THROWS_WITH(read_point_cache(charfix::write_temp("bad2.pc2", std::string(40, 'x'))), Contains("no POINTCACHE2"));
+  pc.samples = {{0, 0, 0, 1, 1, 1}};
+  write_point_cache(tmp("ok.pc2"), pc);
+  std::string cut = slurp(tmp("ok.pc2"));
+  cut.pop_back();
+  CHECK_THROWS_WITH(read_point_cache(charfix::write_temp("cut.pc2", cut)), Contains("expected 56"));
+}
+
+TEST_CASE("deform on Vulkan matches the CPU", "[character][export][deform][vulkan]") {
+  if (!vkt::ready()) return;
+  const std::string src = humanoid_glb(7);
+  const Character ch = load_gltf(src);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  auto cpu = small_model("densegats", std::int64_t(bones.size()));
+  auto vk = small_model("densegats", std::int64_t(bones.size()));
+  cpu->fold_batch_norm();
+  vk->to(Device::vulkan);
+  vk->fold_batch_norm();
+  const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
+  const Clip clip = retarget(load_bvh(std::string(GATCORE_SOURCE_DIR) + "/examples/data/swing.bvh"),
+                             d.prepared.character.skeleton, mat4_identity());
+  const models::Normaliser norm =
+      fit_norm(features_in_bone_order(make_densegats_sample(d.prepared, clip.frames[0], 0, 0).features, d.mapping), true);
+  const float height = 1.0f / d.prepared.norm.scale;
+  for (int f : {0, 3}) {
+    const CorrectedFrame a = deform_frame(d, *cpu, norm, clip.frames[std::size_t(f)]);
+    const CorrectedFrame b = deform_frame(d, *vk, norm, clip.frames[std::size_t(f)]);
+    CHECK(a.lbs == b.lbs);
+    CHECK(max_abs_diff(a.corrected, b.corrected) < 1e-4f * height);
+    CHECK(max_abs_diff(a.corrected, a.lbs) > 0.0f);
+  }
+}

@@ -1,0 +1,173 @@
+// Loss curves: plot_series with axes, ticks and legend, the history files
+// gat train writes, and the PNG decoded by zlib (an independent inflater)
+// when the build found it.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
+
+#ifdef GATCORE_TEST_ZLIB
+#include <zlib.h>
+#endif
+
+#include "gatcore/character/loss_curve.hpp"
+#include "gatcore/character/plot.hpp"
+#include "gatcore/error.hpp"
+
+using namespace gatcore::character;
+using Catch::Matchers::Contains;
+
+namespace {
+
+std::string tmp(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "gatcore_plot_tests";
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+std::uint32_t be32(const std::string& s, std::size_t at) {
+  return (std::uint32_t(std::uint8_t(s[at])) << 24) | (std::uint32_t(std::uint8_t(s[at + 1])) << 16) |
+         (std::uint32_t(std::uint8_t(s[at + 2])) << 8) | std::uint32_t(std::uint8_t(s[at + 3]));
+}
+
+// Decodes an 8-bit RGB, filter-0 PNG (what write_png produces); the inflate
+// step is zlib's when available.
+Image decode_png(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  const std::string b((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  REQUIRE(b.size() > 33);
+  REQUIRE(b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0);
+  Image img;
+  std::string idat;
+  for (std::size_t at = 8; at + 12 <= b.size();) {
+    const std::uint32_t len = be32(b, at);
+    const std::string type = b.substr(at + 4, 4);
+    REQUIRE(at + 12 + len <= b.size());
+    if (type == "IHDR") {
+      img.width = int(be32(b, at + 8));
+      img.height = int(be32(b, at + 12));
+      CHECK(b[at + 16] == 8);  // bit depth
+      CHECK(b[at + 17] == 2);  // RGB
+    } else if (type == "IDAT") {
+      idat += b.substr(at + 8, len);
+    }
+    at += 12 + len;
+  }
+  const std::size_t raw_size = std::size_t(img.height) * (3 * std::size_t(img.width) + 1);
+  std::string raw(raw_size, '\0');
+#ifdef GATCORE_TEST_ZLIB
+  uLongf got = uLongf(raw_size);
+  REQUIRE(uncompress(reinterpret_cast<Bytef*>(raw.data()), &got, reinterpret_cast<const Bytef*>(idat.data()),
+                     uLong(idat.size())) == Z_OK);
+  REQUIRE(got == raw_size);
+#else
+  WARN("SKIPPED: zlib not found at build time; inflating stored blocks by hand");
+  std::size_t at = 2, out = 0;
+  for (bool last = false; !last;) {
+    last = idat[at] & 1;
+    const std::size_t len = std::uint8_t(idat[at + 1]) | (std::size_t(std::uint8_t(idat[at + 2])) << 8);
+    REQUIRE(out + len <= raw_size);
+    std::memcpy(raw.data() + out, idat.data() + at + 5, len);
+    out += len, at += 5 + len;
+  }
+  REQUIRE(out == raw_size);
+#endif
+  img.rgb.resize(std::size_t(img.width) * img.height * 3);
+  for (int y = 0; y < img.height; ++y) {
+    const std::size_t row = std::size_t(y) * (3 * std::size_t(img.width) + 1);
+    REQUIRE(raw[row] == 0);
+    std::memcpy(img.rgb.data() + std::size_t(y) * 3 * img.width, raw.data() + row + 1, 3 * std::size_t(img.width));
+  }
+  return img;
+}
+
+int count_colour(const Image& img, std::array<std::uint8_t, 3> c, int x0 = 0, int x1 = -1) {
+  int n = 0;
+  if (x1 < 0) x1 = img.width;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = x0; x < x1; ++x) n += img.at(x, y) == c;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("text drawing: glyphs differ and have ink", "[character][plot]") {
+  std::set<std::string> seen;
+  for (char c : std::string("0123456789.-+:/()abcdefghijklmnopqrstuvwxyz")) {
+    Image img;
+    img.width = 6, img.height = 7;
+    img.rgb.assign(6 * 7 * 3, 255);
+    draw_text(img, 0, 0, std::string(1, c), {0, 0, 0});
+    CHECK(count_colour(img, {0, 0, 0}) > 0);
+    CHECK(seen.insert(std::string(img.rgb.begin(), img.rgb.end())).second);  // no two characters share a glyph
+  }
+  CHECK(text_width("abc") == 17);
+  CHECK(text_width("abc", 2) == 34);
+}
+
+TEST_CASE("the loss curve and history files gat train writes", "[character][plot][loss]") {
+  std::vector<LossRecord> h;
+  for (int e = 1; e <= 30; ++e) h.push_back({e, 2.0 * std::exp(-0.2 * e), 3.0 * std::exp(-0.15 * e), 1e-3, 0.5});
+  const std::string png = tmp("curve.png");
+  std::filesystem::remove(history_csv_path(png));
+  write_loss_outputs(h, png);
+  CHECK(!std::filesystem::exists(png + ".tmp"));
+  const Image img = decode_png(png);
+  CHECK(img.width == 720);
+  CHECK(img.height == 440);
+  // Both series are drawn (their colours), the axes and labels are ink.
+  const int blue = count_colour(img, {31, 119, 180}), orange = count_colour(img, {255, 127, 14});
+  CHECK(blue > 400);
+  CHECK(orange > 400);
+  CHECK(count_colour(img, {40, 40, 40}, 0, 60) > 150);  // y tick labels left of the axis
+  CHECK(count_colour(img, {255, 255, 255}) > img.width * img.height / 2);
+  // Log scale: the train curve (an exponential) is a straight line, so its
+  // pixels in the middle column sit halfway between those at both ends.
+  const auto mean_row = [&](int x) {
+    double s = 0;
+    int n = 0;
+    for (int y = 0; y < img.height; ++y)
+      if (img.at(x, y) == std::array<std::uint8_t, 3>{31, 119, 180}) s += y, ++n;
+    REQUIRE(n > 0);
+    return s / n;
+  };
+  const int L = 62, R = 720 - 16;
+  const double a = mean_row(L + 20), m = mean_row((L + R) / 2), b = mean_row(R - 60);
+  const double mid_x = ((L + R) / 2 - (L + 20)) / double((R - 60) - (L + 20));
+  CHECK(m == Approx(a + mid_x * (b - a)).margin(3.0));
+
+  std::ifstream f(history_csv_path(png));
+  std::string line;
+  std::getline(f, line);
+  CHECK(line == "epoch,train_loss,val_loss,lr,seconds");
+  int rows = 0;
+  while (std::getline(f, line)) ++rows;
+  CHECK(rows == 30);
+  CHECK(history_csv_path("a/b.png") == "a/b.csv");
+  CHECK(default_curve_path("runs/m.gcm") == "runs/m.loss.png");
+  CHECK(default_curve_path("runs.v2/model") == "runs.v2/model.loss.png");
+
+  // The metadata round trip (resume continues the curve), and bad strings.
+  const std::vector<LossRecord> back = parse_history(format_history(h), "m.gcm");
+  REQUIRE(back.size() == h.size());
+  CHECK(back[4].epoch == 5);
+  CHECK(back[4].train == Approx(h[4].train).epsilon(1e-8));
+  CHECK(back[4].val == Approx(h[4].val).epsilon(1e-8));
+  CHECK_THROWS_WITH(parse_history("1:0.5:x", "m.gcm"), Contains("m.gcm") && Contains("'1:0.5:x'"));
+  CHECK_THROWS_WITH(write_loss_outputs(h, tmp("no_dir/c.png")), Contains("c.csv"));
+}
+
+TEST_CASE("plot_series: one point, no validation, non-positive values, bad sizes", "[character][plot]") {
+  const Image one = plot_series({{"train", {1.f}, {0.5f}}});
+  CHECK(count_colour(one, {31, 119, 180}) > 0);
+  const Image lin = plot_series({{"train", {1.f, 2.f, 3.f}, {0.f, -1.f, 2.f}}});  // falls back to a linear axis
+  CHECK(count_colour(lin, {31, 119, 180}) > 50);
+  CHECK_THROWS_WITH(plot_series({{"train", {1.f, 2.f}, {1.f}}}), Contains("'train' has 2 x and 1 y"));
+  PlotOptions tiny;
+  tiny.width = 10;
+  CHECK_THROWS_WITH(plot_series({}, tiny), Contains("too small"));
+}
