@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include <omp.h>
@@ -92,6 +93,12 @@ int cmd_deform(int argc, char** argv) {
     GATCORE_CHECK(is_gltf_path(in), in, ": -o bakes into the character's glTF file; for other formats write only "
                   "--point-cache");
   }
+  // Fail before minutes of work, not after.
+  for (const std::string& o : {out, pc2}) {
+    const std::filesystem::path dir = std::filesystem::path(o).parent_path();
+    GATCORE_CHECK(o.empty() || dir.empty() || std::filesystem::is_directory(dir), o, ": the directory ", dir.string(),
+                  " does not exist");
+  }
   if (threads > 0) omp_set_num_threads(int(threads));
   const Device dev = device_from_flag(device, "deform");
   models::LoadedModel lm = models::load_checkpoint(model_path);
@@ -144,6 +151,7 @@ int cmd_deform(int argc, char** argv) {
   }
   const double n = double(last - first);
   // Both outputs are complete in memory before either file is written.
+  bool pc2_written = false;
   if (!pc2.empty()) {
     PointCache pc;
     pc.num_points = static_cast<std::int32_t>(ch.num_file_vertices());
@@ -151,8 +159,14 @@ int cmd_deform(int argc, char** argv) {
     pc.sample_rate = 1.0f;
     for (const auto& p : baked.positions) pc.samples.push_back(file_vertex_positions(ch, p));
     write_point_cache(pc2, pc);
+    pc2_written = true;
   }
-  if (!out.empty()) save_gltf_morph_animation(in, ch, baked, out);
+  try {
+    if (!out.empty()) save_gltf_morph_animation(in, ch, baked, out);
+  } catch (...) {
+    if (pc2_written) std::remove(pc2.c_str());  // all outputs or none
+    throw;
+  }
   std::printf("%ld frames in %.2f s: per frame features %.1f ms, inference %.1f ms, total %.1f ms (%.1f fps); "
               "correction mean %.5f max %.5f (character units)\n",
               last - first, std::chrono::duration<double>(std::chrono::steady_clock::now() - t_all).count(), sum_f / n,

@@ -3,6 +3,7 @@
 // written into a copy of the file with everything else kept.
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include <omp.h>
@@ -73,6 +74,9 @@ int cmd_predict_weights(int argc, char** argv) {
   }
   GATCORE_CHECK(is_gltf_path(in), in, ": predict-weights reads glTF characters (.glb / .gltf)");
   GATCORE_CHECK(is_gltf_path(out), out, ": the output must be a .glb or .gltf file");
+  const std::filesystem::path dir = std::filesystem::path(out).parent_path();
+  GATCORE_CHECK(dir.empty() || std::filesystem::is_directory(dir), out, ": the directory ", dir.string(),
+                " does not exist");
   if (threads > 0) omp_set_num_threads(int(threads));
   const Device dev = device_from_flag(device, "predict-weights");
   models::LoadedModel lm = models::load_checkpoint(model_path);
