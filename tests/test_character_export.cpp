@@ -411,3 +411,51 @@ TEST_CASE("deform on Vulkan matches the CPU", "[character][export][deform][vulka
     CHECK(max_abs_diff(a.corrected, a.lbs) > 0.0f);
   }
 }
+
+TEST_CASE("deform bakes a real character's walk (FBX2glTF bind space) for viewers", "[character][export][deform][data]") {
+  const auto dir = charfix::data_dir();
+  const auto src = dir / "characters" / "quaternius" / "modular_men" / "Farmer.glb";
+  const auto walk = dir / "motion" / "cmu" / "walk.bvh";
+  if (dir.empty() || !std::filesystem::exists(src) || !std::filesystem::exists(walk)) {
+    WARN("SKIPPED: data not found (" << src << ", " << walk << ")");
+    return;
+  }
+  const Character ch = load_gltf(src.string());
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  auto model = small_model("densegats", std::int64_t(bones.size()));
+  model->fold_batch_norm();
+  const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
+  const Clip clip = retarget(load_bvh(walk.string()), d.prepared.character.skeleton, mat4_identity());
+  const models::Normaliser norm =
+      fit_norm(features_in_bone_order(make_densegats_sample(d.prepared, clip.frames[0], 0, 0).features, d.mapping), true);
+  BakedFrames baked;
+  baked.fps = clip.fps;
+  for (int f : {0, 40}) baked.positions.push_back(deform_frame(d, *model, norm, clip.frames[std::size_t(f)]).corrected);
+  // glTF world frame: Y up, feet on the ground, a human height (metres).
+  float lo = 1e9f, hi = -1e9f;
+  for (std::size_t i = 1; i < baked.positions[1].size(); i += 3) lo = std::min(lo, baked.positions[1][i]), hi = std::max(hi, baked.positions[1][i]);
+  CHECK(std::abs(lo) < 0.1f);
+  CHECK((hi - lo > 1.0f && hi - lo < 2.5f));
+  const std::string out = tmp("farmer_walk.glb");
+  save_gltf_morph_animation(src.string(), ch, baked, out);
+  const tinygltf::Model m = read_gltf(out);
+  const Character back = load_gltf(out);
+  // The bake's clip makes skinning the identity on the file's bind-space mesh ...
+  REQUIRE(back.clips.size() == read_gltf(src.string()).animations.size() + 1);
+  const Clip& held = back.clips.back();
+  CHECK(max_abs_diff(linear_blend_skinning(back.mesh, skinning_matrices(back.skeleton, held.frames.at(0))),
+                     back.mesh.positions) < 1e-3f);
+  // ... and every primitive's base + target f is frame f in the world frame.
+  const std::vector<float> want = file_vertex_positions(ch, baked.positions[1]);
+  for (const SourcePrimitive& sp : ch.primitives) {
+    const auto& prim = m.meshes.at(std::size_t(sp.mesh)).primitives.at(std::size_t(sp.primitive));
+    REQUIRE(prim.targets.size() >= 2);
+    const std::size_t t = prim.targets.size() - 1;
+    std::vector<float> shown = floats(m, prim.targets[t].at("POSITION"));
+    const std::vector<float> base = floats(m, prim.attributes.at("POSITION"));
+    float err = 0;
+    for (std::size_t i = 0; i < shown.size(); ++i)
+      err = std::max(err, std::abs(shown[i] + base[i] - want[3 * std::size_t(sp.first_vertex) + i]));
+    CHECK(err < 1e-4f);
+  }
+}
