@@ -334,8 +334,14 @@ TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f; 
   REQUIRE(back.clips.size() == 1);
   CHECK(max_abs_diff(linear_blend_skinning(back.mesh, skinning_matrices(back.skeleton, back.clips[0].frames.at(2))),
                      back.mesh.positions) < 1e-5f * height);
-  // Another importer reads it too.
+  // Another importer reads it too, and the JSON flavour holds the same.
   CHECK(load_assimp_character(out).num_file_vertices() == ch.num_file_vertices());
+  const std::string json = tmp("deformed.gltf");
+  save_gltf_morph_animation(src, ch, baked, json);
+  const Character back_json = load_gltf(json);
+  CHECK(back_json.mesh.positions == back.mesh.positions);
+  REQUIRE(back_json.clips.size() == 1);
+  CHECK(back_json.clips[0].frames.size() == back.clips[0].frames.size());
 
   // The point cache: header and positions.
   const std::string bytes = slurp(pc2);
