@@ -140,6 +140,13 @@ int gat::cmd_train(int argc, char** argv) {
     }
   }
   if (threads > 0) omp_set_num_threads(int(threads));
+  if (curve.empty()) curve = gatcore::character::default_curve_path(out);
+  // Before any training: a curve that cannot be written would stop the run.
+  if (const auto dir = std::filesystem::path(curve).parent_path(); !dir.empty() && !std::filesystem::is_directory(dir)) {
+    std::fprintf(stderr, "gat train: --loss-curve %s: the directory %s does not exist\n", curve.c_str(),
+                 dir.string().c_str());
+    return 2;
+  }
   const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
 
   std::unique_ptr<Model> model;
@@ -242,7 +249,6 @@ int gat::cmd_train(int argc, char** argv) {
     extra["data"] = "embedded tube character";
     extra["skeleton"] = "upper_arm,forearm";
   }
-  if (curve.empty()) curve = gatcore::character::default_curve_path(out);
   std::vector<LossRecord> history;
   if (!resume.empty() && loaded.file.metadata.count("loss_history")) {
     history = gatcore::character::parse_history(loaded.file.metadata.at("loss_history"), resume);
