@@ -1,6 +1,7 @@
 // `gat info FILE`: what a character or motion file holds (vertices,
 // components, joints, influences per vertex, clips). Bad files exit non-zero
 // with the reason.
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <cstring>
@@ -8,6 +9,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "gatcore/character/bake.hpp"
 #include "gatcore/character/dataset.hpp"
 #include "gatcore/character/import.hpp"
 #include "gatcore/character/motion.hpp"
@@ -93,12 +95,27 @@ void print_dataset(const std::string& path, const DatasetDescription& d) {
   std::printf("subsample  %lld consecutive vertices per sample\n", static_cast<long long>(d.subsample));
 }
 
+void print_point_cache(const std::string& path, const PointCache& pc) {
+  std::printf("point cache %s\n", path.c_str());
+  std::printf("points      %d\n", pc.num_points);
+  std::printf("samples     %zu from frame %g, every %g frames\n", pc.samples.size(), pc.start_frame, pc.sample_rate);
+  if (pc.samples.empty() || pc.num_points == 0) return;
+  for (std::size_t s : {std::size_t{0}, pc.samples.size() - 1}) {
+    float lo[3], hi[3];
+    for (int c = 0; c < 3; ++c) lo[c] = hi[c] = pc.samples[s][c];
+    for (std::size_t i = 0; i < pc.samples[s].size(); ++i)
+      lo[i % 3] = std::min(lo[i % 3], pc.samples[s][i]), hi[i % 3] = std::max(hi[i % 3], pc.samples[s][i]);
+    std::printf("  sample %-4zu bounds [%.4g %.4g %.4g] .. [%.4g %.4g %.4g]\n", s, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  }
+}
+
 }  // namespace
 
 int cmd_info(int argc, char** argv) {
   if (argc != 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     std::fprintf(argc == 2 ? stdout : stderr,
-                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf / .fbx / .dae) or a motion (.bvh) or a dataset (.json)\n");
+                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf / .fbx / .dae), a motion (.bvh), a dataset (.json) or a\n"
+                 "        point cache (.pc2, as gat deform writes)\n");
     return argc == 2 ? 0 : 2;
   }
   const std::string path = argv[1];
@@ -114,7 +131,12 @@ int cmd_info(int argc, char** argv) {
     print_motion(load_bvh(path));
     return 0;
   }
-  throw gatcore::InvalidArgument(path + ": unknown file type (expected .glb, .gltf, .fbx, .dae, .bvh or a dataset .json)");
+  if (ends_with(path, ".pc2")) {
+    print_point_cache(path, read_point_cache(path));
+    return 0;
+  }
+  throw gatcore::InvalidArgument(path +
+                                 ": unknown file type (expected .glb, .gltf, .fbx, .dae, .bvh, .pc2 or a dataset .json)");
 }
 
 }  // namespace gat
