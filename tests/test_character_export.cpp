@@ -357,6 +357,36 @@ TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f; 
   for (int f = 0; f < 4; ++f) CHECK(rc.samples[std::size_t(f)] == cache.samples[std::size_t(f)]);
 }
 
+TEST_CASE("deform bakes joints given by matrices as TRS (glTF animates only TRS nodes)", "[character][export][deform]") {
+  tinygltf::Model m = read_gltf(humanoid_glb(5));
+  int changed = 0;
+  for (auto& n : m.nodes) {
+    if (n.name != "UpperArm.L") continue;
+    ++changed;
+    Transform t;
+    for (int c = 0; c < 3; ++c) t.translation[std::size_t(c)] = float(n.translation[std::size_t(c)]);
+    for (int c = 0; c < 4; ++c) t.rotation[std::size_t(c)] = float(n.rotation[std::size_t(c)]);
+    const Mat4 mat = to_matrix(t);
+    n.matrix.assign(mat.begin(), mat.end());
+    n.translation.clear(), n.rotation.clear(), n.scale.clear();
+  }
+  REQUIRE(changed == 1);
+  const std::string src = tmp("humanoid_matrix.glb");
+  tinygltf::TinyGLTF g;
+  REQUIRE(g.WriteGltfSceneToFile(&m, src, true, true, false, true));
+  const Character ch = load_gltf(src);
+  BakedFrames one;
+  one.positions = {ch.mesh.positions};
+  const std::string out = tmp("humanoid_matrix_baked.glb");
+  save_gltf_morph_animation(src, ch, one, out);
+  const tinygltf::Model b = read_gltf(out);
+  for (const auto& c : b.animations.at(0).channels)
+    CHECK(b.nodes.at(std::size_t(c.target_node)).matrix.empty());
+  const Character back = load_gltf(out);
+  CHECK(max_abs_diff(linear_blend_skinning(back.mesh, skinning_matrices(back.skeleton, rest_pose(back.skeleton))),
+                     linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, rest_pose(ch.skeleton)))) < 1e-5f);
+}
+
 TEST_CASE("bake and point cache errors leave no file behind", "[character][export][errors]") {
   const std::string src = humanoid_glb(5);
   const Character ch = load_gltf(src);

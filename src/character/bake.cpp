@@ -150,6 +150,16 @@ void save_gltf_morph_animation(const std::string& source_path, const Character& 
     const int node = ch.joint_nodes[j];
     GATCORE_CHECK(node >= 0 && node < num_nodes, source_path, ": joint '", ch.skeleton.names[j],
                   "' has no node in the file");
+    // glTF animates only TRS nodes: a joint given by a matrix gets the same
+    // transform as TRS (joints carry no shear).
+    tinygltf::Node& jn = model.nodes[static_cast<std::size_t>(node)];
+    if (jn.matrix.size() == 16) {
+      const Transform rest = to_transform(gltf_util::node_matrix(jn));
+      jn.matrix.clear();
+      jn.translation.assign(rest.translation.begin(), rest.translation.end());
+      jn.rotation.assign(rest.rotation.begin(), rest.rotation.end());
+      jn.scale.assign(rest.scale.begin(), rest.scale.end());
+    }
     const Transform& t = bind.local[j];
     std::vector<float> tr, rot, sc;
     for (std::size_t k = 0; k <= F; ++k) {
