@@ -86,7 +86,7 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
         std::copy(m.begin(), m.end(), ibm.begin() + 16 * k);
       }
       skin.inverseBindMatrices = append_accessor(model, ibm.data(), ibm.size() * 4, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                        TINYGLTF_TYPE_MAT4, skin.joints.size());
+                                                 TINYGLTF_TYPE_MAT4, skin.joints.size());
       new_ibm[skin_id] = skin.inverseBindMatrices;
     }
     auto& prim = model.meshes[sp.mesh].primitives.at(static_cast<std::size_t>(sp.primitive));
