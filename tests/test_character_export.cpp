@@ -495,3 +495,38 @@ TEST_CASE("deform bakes a real character's walk (FBX2glTF bind space) for viewer
     CHECK(err < 1e-4f);
   }
 }
+
+TEST_CASE("predicted weights for a real multi-primitive character re-import through the weld map",
+          "[character][export][weights][data]") {
+  const auto dir = charfix::data_dir();
+  const auto src = dir / "characters" / "quaternius" / "modular_men" / "Farmer.glb";
+  if (dir.empty() || !std::filesystem::exists(src)) {
+    WARN("SKIPPED: data not found (" << src << ")");
+    return;
+  }
+  const Character ch = load_gltf(src.string());
+  REQUIRE(ch.primitives.size() > 1);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  auto model = small_model("neuroskinning", std::int64_t(bones.size()));
+  const PreparedCharacter pc = prepare_character(ch);
+  const BoneMapping map = map_bones(ch.skeleton, bones, {}, "Farmer");
+  const models::Normaliser norm = fit_norm(features_in_bone_order(make_neuroskinning_sample(pc).features, map), false);
+  const WeightPrediction p = predict_skin_weights(*model, norm, bones, ch, 4);
+  const std::string out = tmp("farmer_weights.glb");
+  save_gltf_with_weights(src.string(), ch, p.weights, out, 4);
+  const Character back = load_gltf(out);
+  CHECK(back.welded_from_file == ch.welded_from_file);
+  CHECK(back.mesh.positions == ch.mesh.positions);
+  CHECK(back.mesh.weights.joint == p.weights.joint);
+  REQUIRE(back.mesh.weights.weight.size() == p.weights.weight.size());
+  float worst = 0;
+  for (std::size_t k = 0; k < p.weights.weight.size(); ++k)
+    worst = std::max(worst, std::abs(back.mesh.weights.weight[k] - p.weights.weight[k]));
+  CHECK(worst < 1e-6f);
+  const tinygltf::Model a = read_gltf(src.string()), b = read_gltf(out);
+  CHECK(b.materials.size() == a.materials.size());
+  CHECK(b.images.size() == a.images.size());
+  CHECK(b.textures.size() == a.textures.size());
+  CHECK(b.animations.size() == a.animations.size());
+  CHECK(b.meshes.size() == a.meshes.size());
+}
