@@ -250,7 +250,7 @@ TEST_CASE("checkpoints and characters that do not fit predict-weights / deform",
   CHECK_THROWS_WITH(deform_frame(d, *nsm, norm, d.prepared.rest), Contains("not displacements"));
 }
 
-TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f; .pc2 holds the same",
+TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f, the .pc2 holds the same",
           "[character][export][deform]") {
   const std::string src = humanoid_glb(7);
   const Character ch = load_gltf(src);
