@@ -22,10 +22,10 @@ void main() {
   uint i = id / pc.H, k = id % pc.H;
   uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float S = 0.0;
-  for (uint e = b; e < e1; ++e) S += SB(alpha)[AT(alpha, e, k)] * SB(dalpha)[AT(dalpha, e, k)];
+  STRIDED_FOR(e, b, e1, 1u) S += SB(alpha)[AT(alpha, e, k)] * SB(dalpha)[AT(dalpha, e, k)];
   float li = SB(el)[AT(el, i, k)];
   float acc = 0.0;
-  for (uint e = b; e < e1; ++e) {
+  STRIDED_FOR(e, b, e1, 1u) {
     float ds = SB(alpha)[AT(alpha, e, k)] * (SB(dalpha)[AT(dalpha, e, k)] - S);
     float g = leaky_grad(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], ds, pc.slope);
     SB(gs)[AT(gs, e, k)] = g;

@@ -18,13 +18,13 @@ void main() {
   if (b == e1) return;
   float li = SB(el)[AT(el, i, k)];
   float m = -1.0 / 0.0;
-  for (uint e = b; e < e1; ++e) m = max(m, leaky(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], pc.slope));
+  STRIDED_FOR(e, b, e1, 1u) m = max(m, leaky(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], pc.slope));
   float s = 0.0;
-  for (uint e = b; e < e1; ++e) {
+  STRIDED_FOR(e, b, e1, 1u) {
     float p = exp(leaky(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], pc.slope) - m);
     SB(alpha)[AT(alpha, e, k)] = p;
     s += p;
   }
   float inv = 1.0 / s;
-  for (uint e = b; e < e1; ++e) SB(alpha)[AT(alpha, e, k)] *= inv;
+  STRIDED_FOR(e, b, e1, 1u) SB(alpha)[AT(alpha, e, k)] *= inv;
 }

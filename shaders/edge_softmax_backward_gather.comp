@@ -16,6 +16,6 @@ void main() {
   uint b = uint(SB(out_ptr)[j]), e1 = uint(SB(out_ptr)[j + 1u]);
   if (b == e1) return;
   float acc = 0.0;
-  for (uint t = b; t < e1; ++t) acc += SB(gs)[AT(gs, uint(SB(out_edge)[t]), k)];
+  STRIDED_FOR(t, b, e1, 1u) acc += SB(gs)[AT(gs, uint(SB(out_edge)[t]), k)];
   SB(dx)[AT(dx, j, k)] += acc;
 }

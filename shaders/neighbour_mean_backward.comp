@@ -15,7 +15,7 @@ void main() {
   if (id >= pc.n * pc.C) return;
   uint j = id / pc.C, c = id % pc.C;
   float acc = 0.0;
-  for (uint t = uint(SB(out_ptr)[j]); t < uint(SB(out_ptr)[j + 1u]); ++t) {
+  STRIDED_FOR(t, uint(SB(out_ptr)[j]), uint(SB(out_ptr)[j + 1u]), 1u) {
     uint i = uint(SB(out_dst)[t]);
     acc += SB(dout)[AT(dout, i, c)] / float(SB(indptr)[i + 1u] - SB(indptr)[i]);
   }

@@ -15,6 +15,6 @@ void main() {
   uint i = id / pc.C, c = id % pc.C;
   uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float acc = 0.0;
-  for (uint e = b; e < e1; ++e) acc += SB(x)[AT(x, uint(SB(indices)[e]), c)];
+  STRIDED_FOR(e, b, e1, 1u) acc += SB(x)[AT(x, uint(SB(indices)[e]), c)];
   SB(o)[AT(o, i, c)] = b == e1 ? 0.0 : acc / float(e1 - b);
 }

@@ -20,7 +20,7 @@ void main() {
   if (r0 < r1) {
     best = SB(x)[AT(x, r0, c)];
     idx = int(r0);
-    for (uint r = r0 + 1u; r < r1; ++r) {
+    STRIDED_FOR(r, r0 + 1u, r1, 1u) {
       float v = SB(x)[AT(x, r, c)];
       if (v > best || (isnan(v) && !isnan(best))) {
         best = v;

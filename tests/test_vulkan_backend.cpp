@@ -381,3 +381,46 @@ TEST_CASE("vulkan: pooling (segment max, broadcast, neighbour mean)", "[vulkan]"
                       Catch::Contains("seg_ptr"));
   large_paths.require();
 }
+
+// lavapipe ends an invocation's loops after 65535 iterations in total; the
+// per-invocation edge and segment loops take 16 steps per iteration
+// (STRIDED_FOR), so a hub row of 70000 in-edges, walked up to three times,
+// still comes out whole.
+TEST_CASE("vulkan: a hub row past lavapipe's loop cap", "[vulkan]") {
+  if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;
+  std::mt19937 rng(6);
+  const std::int32_t hub = 70000, n = hub + 1;
+  std::vector<std::int32_t> src, dst;
+  for (std::int32_t j = 1; j < n; ++j) {
+    src.push_back(j);
+    dst.push_back(0);
+  }
+  const CsrGraph g = graph_from_edges(n, src, dst);
+  const std::int64_t E = g.num_edges(), Hh = 2, C = 4;
+  Tensor el = rnd(n, Hh, rng), er = rnd(n, Hh, rng), z = rnd(n, C, rng);
+  Tensor ac = Tensor::empty(E, Hh), ag = gpu().empty(E, Hh, DType::f32);
+  cpu().edge_softmax_additive_forward(g, el, er, 0.2f, ac);
+  gpu().edge_softmax_additive_forward(g, V(el), V(er), 0.2f, ag);
+  require_close(ac, ag, 1e-4f, 1e-7f, "edge_softmax_additive_forward");
+  Tensor oc = Tensor::empty(n, C), og = gpu().empty(n, C, DType::f32);
+  cpu().aggregate_forward(g, ac, z, oc);
+  gpu().aggregate_forward(g, ag, V(z), og);
+  require_close(oc, og, 1e-4f, 1e-6f, "aggregate_forward");
+  Tensor mc = Tensor::empty(n, C), mg = gpu().empty(n, C, DType::f32);
+  cpu().neighbour_mean_forward(g, z, mc);
+  gpu().neighbour_mean_forward(g, V(z), mg);
+  require_close(mc, mg, 1e-4f, 1e-6f, "neighbour_mean_forward");
+  // One segment of all n rows.
+  const std::vector<std::int64_t> seg = {0, n};
+  Tensor sc = Tensor::empty(1, C), sa = Tensor::empty(1, C, DType::i32);
+  Tensor sg = gpu().empty(1, C, DType::f32), sag = gpu().empty(1, C, DType::i32);
+  cpu().segment_max_forward(z, seg, sc, sa);
+  gpu().segment_max_forward(V(z), seg, sg, sag);
+  require_close(sc, sg, 0, 0, "segment_max_forward");
+  Tensor dxc = Tensor::zeros(1, C), dxg = gpu().zeros(1, C, DType::f32);
+  cpu().broadcast_segments_backward(z, seg, dxc);
+  gpu().broadcast_segments_backward(V(z), seg, dxg);
+  require_close(dxc, dxg, 1e-4f, 1e-3f, "broadcast_segments_backward");
+  large_paths.require();
+}

@@ -56,7 +56,7 @@ struct Launch {
   Launch& t(const Tensor& x, bool write, const char* what) {
     check_vk(x, what);
     const Context& c = ctx();
-    const Buffer* b = buffer_of(*x.storage());
+    Buffer* b = buffer_of(*x.storage());
     const std::uint64_t start = static_cast<std::uint64_t>(x.offset()) * 4;
     const std::uint64_t base = start - start % c.storage_align;
     const std::uint64_t span =
@@ -66,7 +66,7 @@ struct Launch {
     // Shaders index 32-bit (SPIR-V access chains take signed indices).
     GATCORE_CHECK(range / 4 < (std::uint64_t{1} << 31), "vulkan: ", what, " ", x.shape_str(), " spans ", range,
                   " bytes; shaders index at most 2^31 elements per operand");
-    bindings.push_back({b->buffer, base, range, write, what, const_cast<Buffer*>(b)});
+    bindings.push_back({b->buffer, base, range, write, what, b});
     push.push_back(static_cast<std::uint32_t>((start - base) / 4));
     push.push_back(u32(x.ld(), "row stride"));
     return *this;
