@@ -5,7 +5,8 @@
 # glslangValidator are found, ON requires them, OFF skips it. Every
 # shaders/*.comp is compiled to SPIR-V at build time (one custom command per
 # shader; glslangValidator's depfile tracks the shaders/*.glsl it includes) and
-# embedded in the library as uint32_t arrays (a generated .cpp).
+# embedded in the library as uint32_t arrays (a generated .cpp), each in a
+# descriptor variant and a buffer-device-address variant (<name>_bda).
 set(GATCORE_HAVE_VULKAN OFF)
 set(GATCORE_CONFIG_FIND_VULKAN OFF)
 string(TOUPPER "${GATCORE_VULKAN}" _gatcore_vk_mode)
@@ -30,21 +31,31 @@ if(GATCORE_HAVE_VULKAN)
   file(MAKE_DIRECTORY ${_spv_dir})
   set(_incs "")
   set(_table "")
+  # Two variants per shader from one source (shaders/elementwise.glsl):
+  # <name> binds descriptors, <name>_bda reaches its buffers through device
+  # addresses (for operands past maxStorageBufferRange).
   foreach(_shader ${_gatcore_shaders})
-    get_filename_component(_name ${_shader} NAME_WE)
-    set(_out ${_spv_dir}/${_name}.spv.inc)
-    add_custom_command(
-      OUTPUT ${_out}
-      COMMAND ${GATCORE_GLSLANG_VALIDATOR} -V --target-env vulkan1.1 -DELEM=float
-              -I${PROJECT_SOURCE_DIR}/shaders --vn gatcore_spv_${_name} --depfile ${_spv_dir}/${_name}.d
-              -o ${_out} ${_shader}
-      DEPENDS ${_shader}
-      DEPFILE ${_spv_dir}/${_name}.d
-      COMMENT "glslang: shaders/${_name}.comp"
-      VERBATIM)
-    list(APPEND _incs ${_out})
-    string(APPEND _gatcore_vk_includes "#include \"shaders/${_name}.spv.inc\"\n")
-    string(APPEND _gatcore_vk_table "    {\"${_name}\", gatcore_spv_${_name}, sizeof(gatcore_spv_${_name}) / 4},\n")
+    get_filename_component(_base ${_shader} NAME_WE)
+    foreach(_variant "" "_bda")
+      set(_name ${_base}${_variant})
+      set(_defs -DELEM=float)
+      if(_variant STREQUAL "_bda")
+        list(APPEND _defs -DGATCORE_BDA)
+      endif()
+      set(_out ${_spv_dir}/${_name}.spv.inc)
+      add_custom_command(
+        OUTPUT ${_out}
+        COMMAND ${GATCORE_GLSLANG_VALIDATOR} -V --target-env vulkan1.1 ${_defs}
+                -I${PROJECT_SOURCE_DIR}/shaders --vn gatcore_spv_${_name} --depfile ${_spv_dir}/${_name}.d
+                -o ${_out} ${_shader}
+        DEPENDS ${_shader}
+        DEPFILE ${_spv_dir}/${_name}.d
+        COMMENT "glslang: shaders/${_base}.comp ${_defs}"
+        VERBATIM)
+      list(APPEND _incs ${_out})
+      string(APPEND _gatcore_vk_includes "#include \"shaders/${_name}.spv.inc\"\n")
+      string(APPEND _gatcore_vk_table "    {\"${_name}\", gatcore_spv_${_name}, sizeof(gatcore_spv_${_name}) / 4},\n")
+    endforeach()
   endforeach()
   set(GATCORE_VK_SHADER_INCLUDES "${_gatcore_vk_includes}")
   set(GATCORE_VK_SHADER_TABLE "${_gatcore_vk_table}")

@@ -14,18 +14,18 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  float g = dy[AT(dy, r, c)];
+  float g = SB(dy)[AT(dy, r, c)];
   float d = g;
   if (pc.act == 1u) {
-    float t = pc.has_y != 0u ? y[AT(y, r, c)] : safe_tanh(x[AT(x, r, c)]);
+    float t = pc.has_y != 0u ? SB(y)[AT(y, r, c)] : safe_tanh(SB(x)[AT(x, r, c)]);
     d = (1.0 - t) * (1.0 + t) * g;
   } else if (pc.act == 2u) {
-    float t = safe_tanh(x[AT(x, r, c)]);
+    float t = safe_tanh(SB(x)[AT(x, r, c)]);
     d = t * t * g;
   } else if (pc.act == 3u || pc.act == 4u) {
-    float s = pc.has_x != 0u ? x[AT(x, r, c)] : y[AT(y, r, c)];
+    float s = pc.has_x != 0u ? SB(x)[AT(x, r, c)] : SB(y)[AT(y, r, c)];
     float neg = pc.act == 4u ? 0.0 : pc.slope;
     d = s > 0.0 ? g : neg * g;
   }
-  dx[AT(dx, r, c)] += d;
+  SB(dx)[AT(dx, r, c)] += d;
 }

@@ -10,11 +10,11 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  float v = x[AT(x, r, c)];
+  float v = SB(x)[AT(x, r, c)];
   float o = v;
   if (pc.act == 1u) o = safe_tanh(v);
   else if (pc.act == 2u) o = v - safe_tanh(v);
   else if (pc.act == 3u) o = v < 0.0 ? pc.slope * v : v;
   else if (pc.act == 4u) o = v < 0.0 ? 0.0 : v;
-  y[AT(y, r, c)] = o;
+  SB(y)[AT(y, r, c)] = o;
 }

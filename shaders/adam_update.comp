@@ -14,11 +14,11 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  float pv = p[AT(p, r, c)];
-  float gc = g[AT(g, r, c)] + pc.wd * pv;
-  float mv = pc.b1 * m[AT(m, r, c)] + (1.0 - pc.b1) * gc;
-  float vv = pc.b2 * v[AT(v, r, c)] + (1.0 - pc.b2) * gc * gc;
-  m[AT(m, r, c)] = mv;
-  v[AT(v, r, c)] = vv;
-  p[AT(p, r, c)] = pv - pc.lr * (mv * pc.c1) / (sqrt(vv * pc.c2) + pc.eps);
+  float pv = SB(p)[AT(p, r, c)];
+  float gc = SB(g)[AT(g, r, c)] + pc.wd * pv;
+  float mv = pc.b1 * SB(m)[AT(m, r, c)] + (1.0 - pc.b1) * gc;
+  float vv = pc.b2 * SB(v)[AT(v, r, c)] + (1.0 - pc.b2) * gc * gc;
+  SB(m)[AT(m, r, c)] = mv;
+  SB(v)[AT(v, r, c)] = vv;
+  SB(p)[AT(p, r, c)] = pv - pc.lr * (mv * pc.c1) / (sqrt(vv * pc.c2) + pc.eps);
 }

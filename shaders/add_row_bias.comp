@@ -10,5 +10,5 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  y[AT(y, r, c)] += bias[pc.bias_off + c];
+  SB(y)[AT(y, r, c)] += SB(bias)[pc.bias_off + c];
 }

@@ -10,5 +10,5 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  dx[AT(dx, r, c)] += pc.scale * s[pc.s_off];
+  SB(dx)[AT(dx, r, c)] += pc.scale * SB(s)[pc.s_off];
 }

@@ -14,11 +14,11 @@ void main() {
   uint item = subgroup_item();
   if (item >= pc.n * pc.H) return;
   uint i = item / pc.H, k = item % pc.H;
-  for (uint e = uint(indptr[i]); e < uint(indptr[i + 1u]); ++e) {
-    uint j = uint(indices[e]);
+  for (uint e = uint(SB(indptr)[i]); e < uint(SB(indptr)[i + 1u]); ++e) {
+    uint j = uint(SB(indices)[e]);
     float d = 0.0;
-    for (uint f = subgroup_lane(); f < pc.F; f += SUBGROUP_SIZE) d += dout[AT(dout, i, k * pc.F + f)] * z[AT(z, j, k * pc.F + f)];
+    for (uint f = subgroup_lane(); f < pc.F; f += SUBGROUP_SIZE) d += SB(dout)[AT(dout, i, k * pc.F + f)] * SB(z)[AT(z, j, k * pc.F + f)];
     d = subgroupAdd(d);
-    if (subgroupElect()) dalpha[AT(dalpha, e, k)] = d;
+    if (subgroupElect()) SB(dalpha)[AT(dalpha, e, k)] = d;
   }
 }

@@ -17,7 +17,7 @@ void main() {
   if (id >= pc.n * C) return;
   uint j = id / C, c = id % C, k = c / pc.F;
   float acc = 0.0;
-  for (uint t = uint(out_ptr[j]); t < uint(out_ptr[j + 1u]); ++t)
-    acc += alpha[AT(alpha, uint(out_edge[t]), k)] * dout[AT(dout, uint(out_dst[t]), c)];
-  dz[AT(dz, j, c)] += acc;
+  STRIDED_FOR(t, uint(SB(out_ptr)[j]), uint(SB(out_ptr)[j + 1u]), 1u)
+    acc += SB(alpha)[AT(alpha, uint(SB(out_edge)[t]), k)] * SB(dout)[AT(dout, uint(SB(out_dst)[t]), c)];
+  SB(dz)[AT(dz, j, c)] += acc;
 }

@@ -16,6 +16,6 @@ void main() {
   if (id >= pc.n * C) return;
   uint i = id / C, c = id % C, k = c / pc.F;
   float acc = 0.0;
-  for (uint e = uint(indptr[i]); e < uint(indptr[i + 1u]); ++e) acc += alpha[AT(alpha, e, k)] * z[AT(z, uint(indices[e]), c)];
-  o[AT(o, i, c)] = acc;
+  STRIDED_FOR(e, uint(SB(indptr)[i]), uint(SB(indptr)[i + 1u]), 1u) acc += SB(alpha)[AT(alpha, e, k)] * SB(z)[AT(z, uint(SB(indices)[e]), c)];
+  SB(o)[AT(o, i, c)] = acc;
 }

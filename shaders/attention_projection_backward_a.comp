@@ -17,15 +17,15 @@ void main() {
   if (g >= pc.H * pc.F) return;
   uint k = g / pc.F, f = g % pc.F;
   float sl = 0.0, sr = 0.0;
-  for (uint i = gl_LocalInvocationID.x; i < pc.n; i += gl_WorkGroupSize.x) {
-    float zv = z[AT(z, i, k * pc.F + f)];
-    if (pc.has_dal != 0u) sl += del[AT(del, i, k)] * zv;
-    if (pc.has_dar != 0u) sr += der[AT(der, i, k)] * zv;
+  STRIDED_FOR(i, gl_LocalInvocationID.x, pc.n, gl_WorkGroupSize.x) {
+    float zv = SB(z)[AT(z, i, k * pc.F + f)];
+    if (pc.has_dal != 0u) sl += SB(del)[AT(del, i, k)] * zv;
+    if (pc.has_dar != 0u) sr += SB(der)[AT(der, i, k)] * zv;
   }
   sl = workgroup_sum(sl);
   sr = workgroup_sum(sr);
   if (gl_LocalInvocationID.x == 0u) {
-    if (pc.has_dal != 0u) dal[AT(dal, k, f)] += sl;
-    if (pc.has_dar != 0u) dar[AT(dar, k, f)] += sr;
+    if (pc.has_dal != 0u) SB(dal)[AT(dal, k, f)] += sl;
+    if (pc.has_dar != 0u) SB(dar)[AT(dar, k, f)] += sr;
   }
 }

@@ -14,5 +14,5 @@ void main() {
   uint C = pc.H * pc.F;
   if (id >= pc.n * C) return;
   uint i = id / C, c = id % C, k = c / pc.F, f = c % pc.F;
-  dz[AT(dz, i, c)] += del[AT(del, i, k)] * al[AT(al, k, f)] + der[AT(der, i, k)] * ar[AT(ar, k, f)];
+  SB(dz)[AT(dz, i, c)] += SB(del)[AT(del, i, k)] * SB(al)[AT(al, k, f)] + SB(der)[AT(der, i, k)] * SB(ar)[AT(ar, k, f)];
 }

@@ -15,14 +15,14 @@ void main() {
   uint i = item / pc.H, k = item % pc.H;
   float sl = 0.0, sr = 0.0;
   for (uint f = subgroup_lane(); f < pc.F; f += SUBGROUP_SIZE) {
-    float zv = z[AT(z, i, k * pc.F + f)];
-    sl += al[AT(al, k, f)] * zv;
-    sr += ar[AT(ar, k, f)] * zv;
+    float zv = SB(z)[AT(z, i, k * pc.F + f)];
+    sl += SB(al)[AT(al, k, f)] * zv;
+    sr += SB(ar)[AT(ar, k, f)] * zv;
   }
   sl = subgroupAdd(sl);
   sr = subgroupAdd(sr);
   if (subgroupElect()) {
-    el[AT(el, i, k)] = sl;
-    er[AT(er, i, k)] = sr;
+    SB(el)[AT(el, i, k)] = sl;
+    SB(er)[AT(er, i, k)] = sr;
   }
 }

@@ -11,6 +11,6 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  float av = a[AT(a, r, c)], bv = b[AT(b, r, c)];
-  y[AT(y, r, c)] = pc.beta == 0.0 ? pc.alpha * av : pc.alpha * av + pc.beta * bv;
+  float av = SB(a)[AT(a, r, c)], bv = SB(b)[AT(b, r, c)];
+  SB(y)[AT(y, r, c)] = pc.beta == 0.0 ? pc.alpha * av : pc.alpha * av + pc.beta * bv;
 }

@@ -10,5 +10,5 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  y[AT(y, r, c)] += pc.alpha * x[AT(x, r, c)];
+  SB(y)[AT(y, r, c)] += pc.alpha * SB(x)[AT(x, r, c)];
 }

@@ -23,32 +23,32 @@ void main() {
   uint c = flat_group();
   if (c >= pc.C) return;
   uint lid = gl_LocalInvocationID.x, W = gl_WorkGroupSize.x;
-  float mu = mean[AT(mean, 0u, c)];
-  float s = stat[AT(stat, 0u, c)];
+  float mu = SB(mean)[AT(mean, 0u, c)];
+  float s = SB(stat)[AT(stat, 0u, c)];
   float invstd = pc.mode == 0u ? s : 1.0 / sqrt(s + pc.eps);
-  float g = pc.has_gamma != 0u ? gamma[AT(gamma, 0u, c)] : 1.0;
+  float g = pc.has_gamma != 0u ? SB(gamma)[AT(gamma, 0u, c)] : 1.0;
   float a = 0.0, b = 0.0;
-  for (uint r = lid; r < pc.n; r += W) {
-    float d = dy[AT(dy, r, c)];
+  STRIDED_FOR(r, lid, pc.n, W) {
+    float d = SB(dy)[AT(dy, r, c)];
     a += d;
-    b += d * (x[AT(x, r, c)] - mu) * invstd;
+    b += d * (SB(x)[AT(x, r, c)] - mu) * invstd;
   }
   a = workgroup_sum(a);
   b = workgroup_sum(b);
   if (lid == 0u) {
-    if (pc.has_db != 0u) db[AT(db, 0u, c)] += a;
-    if (pc.has_dg != 0u) dg[AT(dg, 0u, c)] += b;
+    if (pc.has_db != 0u) SB(db)[AT(db, 0u, c)] += a;
+    if (pc.has_dg != 0u) SB(dg)[AT(dg, 0u, c)] += b;
   }
   if (pc.has_dx == 0u) return;
   float k = g * invstd;
   float km = a / float(pc.n), kp = b / float(pc.n);
-  for (uint r = lid; r < pc.n; r += W) {
-    float d = dy[AT(dy, r, c)];
+  STRIDED_FOR(r, lid, pc.n, W) {
+    float d = SB(dy)[AT(dy, r, c)];
     if (pc.mode == 0u) {
-      float xhat = (x[AT(x, r, c)] - mu) * invstd;
-      dx[AT(dx, r, c)] += k * (d - km - xhat * kp);
+      float xhat = (SB(x)[AT(x, r, c)] - mu) * invstd;
+      SB(dx)[AT(dx, r, c)] += k * (d - km - xhat * kp);
     } else {
-      dx[AT(dx, r, c)] += k * d;
+      SB(dx)[AT(dx, r, c)] += k * d;
     }
   }
 }

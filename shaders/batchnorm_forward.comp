@@ -27,29 +27,29 @@ void main() {
   float mean, invstd;
   if (pc.mode == 0u) {
     float s = 0.0;
-    for (uint r = lid; r < pc.n; r += W) s += x[AT(x, r, c)];
+    STRIDED_FOR(r, lid, pc.n, W) s += SB(x)[AT(x, r, c)];
     mean = workgroup_sum(s) / float(pc.n);
     float q = 0.0;
-    for (uint r = lid; r < pc.n; r += W) {
-      float d = x[AT(x, r, c)] - mean;
+    STRIDED_FOR(r, lid, pc.n, W) {
+      float d = SB(x)[AT(x, r, c)] - mean;
       q += d * d;
     }
     float var = workgroup_sum(q) / float(pc.n);
     invstd = 1.0 / sqrt(var + pc.eps);
     if (lid == 0u) {
-      if (pc.has_smean != 0u) smean[AT(smean, 0u, c)] = mean;
-      if (pc.has_sinv != 0u) sinv[AT(sinv, 0u, c)] = invstd;
+      if (pc.has_smean != 0u) SB(smean)[AT(smean, 0u, c)] = mean;
+      if (pc.has_sinv != 0u) SB(sinv)[AT(sinv, 0u, c)] = invstd;
       float m = pc.momentum;
-      if (pc.has_rm != 0u) rm[AT(rm, 0u, c)] = (1.0 - m) * rm[AT(rm, 0u, c)] + m * mean;
+      if (pc.has_rm != 0u) SB(rm)[AT(rm, 0u, c)] = (1.0 - m) * SB(rm)[AT(rm, 0u, c)] + m * mean;
       if (pc.has_rv != 0u)
-        rv[AT(rv, 0u, c)] = (1.0 - m) * rv[AT(rv, 0u, c)] + m * var * (float(pc.n) / float(pc.n - 1u));
+        SB(rv)[AT(rv, 0u, c)] = (1.0 - m) * SB(rv)[AT(rv, 0u, c)] + m * var * (float(pc.n) / float(pc.n - 1u));
     }
   } else {
-    mean = pc.has_rm != 0u ? rm[AT(rm, 0u, c)] : 0.0;
-    invstd = 1.0 / sqrt((pc.has_rv != 0u ? rv[AT(rv, 0u, c)] : 1.0) + pc.eps);
+    mean = pc.has_rm != 0u ? SB(rm)[AT(rm, 0u, c)] : 0.0;
+    invstd = 1.0 / sqrt((pc.has_rv != 0u ? SB(rv)[AT(rv, 0u, c)] : 1.0) + pc.eps);
   }
-  float g = pc.has_gamma != 0u ? gamma[AT(gamma, 0u, c)] : 1.0;
-  float b = pc.has_beta != 0u ? beta[AT(beta, 0u, c)] : 0.0;
+  float g = pc.has_gamma != 0u ? SB(gamma)[AT(gamma, 0u, c)] : 1.0;
+  float b = pc.has_beta != 0u ? SB(beta)[AT(beta, 0u, c)] : 0.0;
   float sc = invstd * g;
-  for (uint r = lid; r < pc.n; r += W) y[AT(y, r, c)] = (x[AT(x, r, c)] - mean) * sc + b;
+  STRIDED_FOR(r, lid, pc.n, W) SB(y)[AT(y, r, c)] = (SB(x)[AT(x, r, c)] - mean) * sc + b;
 }

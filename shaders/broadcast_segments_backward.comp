@@ -12,6 +12,6 @@ void main() {
   if (id >= pc.S * pc.C) return;
   uint s = id / pc.C, c = id % pc.C;
   float acc = 0.0;
-  for (uint r = uint(seg[s]); r < uint(seg[s + 1u]); ++r) acc += dout[AT(dout, r, c)];
-  dx[AT(dx, s, c)] += acc;
+  STRIDED_FOR(r, uint(SB(seg)[s]), uint(SB(seg)[s + 1u]), 1u) acc += SB(dout)[AT(dout, r, c)];
+  SB(dx)[AT(dx, s, c)] += acc;
 }

@@ -15,7 +15,7 @@ void main() {
   uint lo = 0u, hi = pc.S;  // invariant: seg[lo] <= i < seg[hi]
   while (hi - lo > 1u) {
     uint mid = (lo + hi) / 2u;
-    if (uint(seg[mid]) <= i) lo = mid; else hi = mid;
+    if (uint(SB(seg)[mid]) <= i) lo = mid; else hi = mid;
   }
-  o[AT(o, i, c)] = x[AT(x, lo, c)];
+  SB(o)[AT(o, i, c)] = SB(x)[AT(x, lo, c)];
 }

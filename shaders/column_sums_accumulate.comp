@@ -11,7 +11,7 @@ void main() {
   uint c = flat_group();
   if (c >= pc.cols) return;
   float s = 0.0;
-  for (uint r = gl_LocalInvocationID.x; r < pc.rows; r += gl_WorkGroupSize.x) s += dy[AT(dy, r, c)];
+  STRIDED_FOR(r, gl_LocalInvocationID.x, pc.rows, gl_WorkGroupSize.x) s += SB(dy)[AT(dy, r, c)];
   s = workgroup_sum(s);
-  if (gl_LocalInvocationID.x == 0u) db[pc.db_off + c] += s;
+  if (gl_LocalInvocationID.x == 0u) SB(db)[pc.db_off + c] += s;
 }

@@ -5,6 +5,7 @@
 // Large dispatches are 2-D (x up to 65535 groups); flat_id() linearises them.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_EXT_control_flow_attributes : require
 #ifndef ELEM
 #define ELEM float
 #endif
@@ -27,3 +28,14 @@ float safe_tanh(float x) {
 }
 float leaky(float x, float slope) { return x > 0.0 ? x : x * slope; }
 float leaky_grad(float x, float d, float slope) { return x > 0.0 ? d : d * slope; }
+// Long strided loops: Mesa lavapipe (llvmpipe) ends an invocation's loops after
+// 65535 iterations in total (LP_MAX_TGSI_LOOP_ITERATIONS: one counter shared by
+// every loop of the shader), which a reduction over a large tensor exceeds.
+// Such loops take STRIDE_UNROLL strides per iteration with an unrolled inner
+// loop, visiting the same indices in the same order (results unchanged):
+//   STRIDED_FOR(i, first, n, stride) { body using i }
+const uint STRIDE_UNROLL = 16u;
+#define STRIDED_FOR(i, first, n, stride)                                                   \
+  for (uint i##_0 = (first); i##_0 < (n); i##_0 += (stride) * STRIDE_UNROLL)              \
+    [[unroll]] for (uint i##_u = 0u, i = i##_0; i##_u < STRIDE_UNROLL; ++i##_u, i += (stride)) \
+      if (i < (n))

@@ -10,5 +10,5 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  d[AT(d, r, c)] = s[AT(s, r, c)];
+  SB(d)[AT(d, r, c)] = SB(s)[AT(s, r, c)];
 }

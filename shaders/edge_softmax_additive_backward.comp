@@ -20,16 +20,16 @@ void main() {
   uint id = flat_id();
   if (id >= pc.n * pc.H) return;
   uint i = id / pc.H, k = id % pc.H;
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float S = 0.0;
-  for (uint e = b; e < e1; ++e) S += alpha[AT(alpha, e, k)] * dalpha[AT(dalpha, e, k)];
-  float li = el[AT(el, i, k)];
+  STRIDED_FOR(e, b, e1, 1u) S += SB(alpha)[AT(alpha, e, k)] * SB(dalpha)[AT(dalpha, e, k)];
+  float li = SB(el)[AT(el, i, k)];
   float acc = 0.0;
-  for (uint e = b; e < e1; ++e) {
-    float ds = alpha[AT(alpha, e, k)] * (dalpha[AT(dalpha, e, k)] - S);
-    float g = leaky_grad(li + er[AT(er, uint(indices[e]), k)], ds, pc.slope);
-    gs[AT(gs, e, k)] = g;
+  STRIDED_FOR(e, b, e1, 1u) {
+    float ds = SB(alpha)[AT(alpha, e, k)] * (SB(dalpha)[AT(dalpha, e, k)] - S);
+    float g = leaky_grad(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], ds, pc.slope);
+    SB(gs)[AT(gs, e, k)] = g;
     acc += g;
   }
-  if (pc.has_del != 0u && b != e1) del[AT(del, i, k)] += acc;
+  if (pc.has_del != 0u && b != e1) SB(del)[AT(del, i, k)] += acc;
 }

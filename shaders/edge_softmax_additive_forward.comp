@@ -14,17 +14,17 @@ void main() {
   uint id = flat_id();
   if (id >= pc.n * pc.H) return;
   uint i = id / pc.H, k = id % pc.H;
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   if (b == e1) return;
-  float li = el[AT(el, i, k)];
+  float li = SB(el)[AT(el, i, k)];
   float m = -1.0 / 0.0;
-  for (uint e = b; e < e1; ++e) m = max(m, leaky(li + er[AT(er, uint(indices[e]), k)], pc.slope));
+  STRIDED_FOR(e, b, e1, 1u) m = max(m, leaky(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], pc.slope));
   float s = 0.0;
-  for (uint e = b; e < e1; ++e) {
-    float p = exp(leaky(li + er[AT(er, uint(indices[e]), k)], pc.slope) - m);
-    alpha[AT(alpha, e, k)] = p;
+  STRIDED_FOR(e, b, e1, 1u) {
+    float p = exp(leaky(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], pc.slope) - m);
+    SB(alpha)[AT(alpha, e, k)] = p;
     s += p;
   }
   float inv = 1.0 / s;
-  for (uint e = b; e < e1; ++e) alpha[AT(alpha, e, k)] *= inv;
+  STRIDED_FOR(e, b, e1, 1u) SB(alpha)[AT(alpha, e, k)] *= inv;
 }

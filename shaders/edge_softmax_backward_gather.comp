@@ -13,9 +13,9 @@ void main() {
   uint id = flat_id();
   if (id >= pc.n * pc.H) return;
   uint j = id / pc.H, k = id % pc.H;
-  uint b = uint(out_ptr[j]), e1 = uint(out_ptr[j + 1u]);
+  uint b = uint(SB(out_ptr)[j]), e1 = uint(SB(out_ptr)[j + 1u]);
   if (b == e1) return;
   float acc = 0.0;
-  for (uint t = b; t < e1; ++t) acc += gs[AT(gs, uint(out_edge[t]), k)];
-  dx[AT(dx, j, k)] += acc;
+  STRIDED_FOR(t, b, e1, 1u) acc += SB(gs)[AT(gs, uint(SB(out_edge)[t]), k)];
+  SB(dx)[AT(dx, j, k)] += acc;
 }

@@ -15,9 +15,9 @@ void main() {
   uint id = flat_id();
   if (id >= pc.n * pc.H) return;
   uint i = id / pc.H, k = id % pc.H;
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float S = 0.0;
-  for (uint e = b; e < e1; ++e) S += alpha[AT(alpha, e, k)] * dalpha[AT(dalpha, e, k)];
-  for (uint e = b; e < e1; ++e)
-    gs[AT(gs, e, k)] = pc.scale * alpha[AT(alpha, e, k)] * (dalpha[AT(dalpha, e, k)] - S);
+  STRIDED_FOR(e, b, e1, 1u) S += SB(alpha)[AT(alpha, e, k)] * SB(dalpha)[AT(dalpha, e, k)];
+  STRIDED_FOR(e, b, e1, 1u)
+    SB(gs)[AT(gs, e, k)] = pc.scale * SB(alpha)[AT(alpha, e, k)] * (SB(dalpha)[AT(dalpha, e, k)] - S);
 }

@@ -20,8 +20,8 @@ void main() {
   if (id >= pc.n * C) return;
   uint i = id / C, c = id % C, k = c / pc.F;
   float acc = 0.0;
-  for (uint e = uint(indptr[i]); e < uint(indptr[i + 1u]); ++e) acc += gs[AT(gs, e, k)] * h[AT(h, uint(indices[e]), c)];
-  for (uint t = uint(out_ptr[i]); t < uint(out_ptr[i + 1u]); ++t)
-    acc += gs[AT(gs, uint(out_edge[t]), k)] * h[AT(h, uint(out_dst[t]), c)];
-  dh[AT(dh, i, c)] += acc;
+  STRIDED_FOR(e, uint(SB(indptr)[i]), uint(SB(indptr)[i + 1u]), 1u) acc += SB(gs)[AT(gs, e, k)] * SB(h)[AT(h, uint(SB(indices)[e]), c)];
+  STRIDED_FOR(t, uint(SB(out_ptr)[i]), uint(SB(out_ptr)[i + 1u]), 1u)
+    acc += SB(gs)[AT(gs, uint(SB(out_edge)[t]), k)] * SB(h)[AT(h, uint(SB(out_dst)[t]), c)];
+  SB(dh)[AT(dh, i, c)] += acc;
 }

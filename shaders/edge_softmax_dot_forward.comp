@@ -14,23 +14,23 @@ void main() {
   uint item = subgroup_item();
   if (item >= pc.n * pc.H) return;
   uint i = item / pc.H, k = item % pc.H;
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float m = -1.0 / 0.0;
   for (uint e = b; e < e1; ++e) {
-    uint j = uint(indices[e]);
+    uint j = uint(SB(indices)[e]);
     float d = 0.0;
-    for (uint f = subgroup_lane(); f < pc.F; f += SUBGROUP_SIZE) d += h[AT(h, i, k * pc.F + f)] * h[AT(h, j, k * pc.F + f)];
+    for (uint f = subgroup_lane(); f < pc.F; f += SUBGROUP_SIZE) d += SB(h)[AT(h, i, k * pc.F + f)] * SB(h)[AT(h, j, k * pc.F + f)];
     float s = pc.scale * subgroupAdd(d);
     m = max(m, s);
-    if (subgroupElect()) alpha[AT(alpha, e, k)] = s;
+    if (subgroupElect()) SB(alpha)[AT(alpha, e, k)] = s;
   }
   if (!subgroupElect() || b == e1) return;
   float sum = 0.0;
   for (uint e = b; e < e1; ++e) {
-    float p = exp(alpha[AT(alpha, e, k)] - m);
-    alpha[AT(alpha, e, k)] = p;
+    float p = exp(SB(alpha)[AT(alpha, e, k)] - m);
+    SB(alpha)[AT(alpha, e, k)] = p;
     sum += p;
   }
   float inv = 1.0 / sum;
-  for (uint e = b; e < e1; ++e) alpha[AT(alpha, e, k)] *= inv;
+  for (uint e = b; e < e1; ++e) SB(alpha)[AT(alpha, e, k)] *= inv;
 }

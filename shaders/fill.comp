@@ -9,5 +9,5 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  y[AT(y, r, c)] = pc.value;
+  SB(y)[AT(y, r, c)] = pc.value;
 }

@@ -25,24 +25,24 @@ void main() {
   uint item = subgroup_item();
   if (item >= pc.n * pc.H) return;
   uint i = item / pc.H, k = item % pc.H, lane = subgroup_lane();
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float S = 0.0;
   for (uint e = b; e < e1; ++e) {
-    uint j = uint(indices[e]);
+    uint j = uint(SB(indices)[e]);
     float d = 0.0;
-    for (uint f = lane; f < pc.F; f += SUBGROUP_SIZE) d += dout[AT(dout, i, k * pc.F + f)] * z[AT(z, j, k * pc.F + f)];
+    for (uint f = lane; f < pc.F; f += SUBGROUP_SIZE) d += SB(dout)[AT(dout, i, k * pc.F + f)] * SB(z)[AT(z, j, k * pc.F + f)];
     d = subgroupAdd(d);
-    S += alpha[AT(alpha, e, k)] * d;
-    if (lane == 0u) gs[AT(gs, e, k)] = d;  // parked d_alpha, read back by this lane only
+    S += SB(alpha)[AT(alpha, e, k)] * d;
+    if (lane == 0u) SB(gs)[AT(gs, e, k)] = d;  // parked d_alpha, read back by this lane only
   }
   if (lane != 0u || b == e1) return;
-  float li = el[AT(el, i, k)];
+  float li = SB(el)[AT(el, i, k)];
   float acc = 0.0;
   for (uint e = b; e < e1; ++e) {
-    float ds = alpha[AT(alpha, e, k)] * (gs[AT(gs, e, k)] - S);
-    float g = leaky_grad(li + er[AT(er, uint(indices[e]), k)], ds, pc.slope);
-    gs[AT(gs, e, k)] = g;
+    float ds = SB(alpha)[AT(alpha, e, k)] * (SB(gs)[AT(gs, e, k)] - S);
+    float g = leaky_grad(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], ds, pc.slope);
+    SB(gs)[AT(gs, e, k)] = g;
     acc += g;
   }
-  if (pc.has_del != 0u) del[AT(del, i, k)] += acc;
+  if (pc.has_del != 0u) SB(del)[AT(del, i, k)] += acc;
 }

@@ -20,11 +20,11 @@ void main() {
   uint item = subgroup_item();
   if (item >= pc.n * pc.H) return;
   uint i = item / pc.H, k = item % pc.H, lane = subgroup_lane();
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
-  float li = el[AT(el, i, k)];
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
+  float li = SB(el)[AT(el, i, k)];
   float m = -1.0 / 0.0, s = 0.0;
   for (uint e = b; e < e1; ++e) {
-    float x = leaky(li + er[AT(er, uint(indices[e]), k)], pc.slope);
+    float x = leaky(li + SB(er)[AT(er, uint(SB(indices)[e]), k)], pc.slope);
     float mn = max(m, x);
     s = s * exp(m - mn) + exp(x - mn);
     m = mn;
@@ -34,11 +34,11 @@ void main() {
     uint f = f0 + lane;
     float acc = 0.0;
     for (uint e = b; e < e1; ++e) {
-      uint j = uint(indices[e]);
-      float p = exp(leaky(li + er[AT(er, j, k)], pc.slope) - m) * inv;
-      if (f0 == 0u && lane == 0u) alpha[AT(alpha, e, k)] = p;
-      if (f < pc.F) acc += p * z[AT(z, j, k * pc.F + f)];
+      uint j = uint(SB(indices)[e]);
+      float p = exp(leaky(li + SB(er)[AT(er, j, k)], pc.slope) - m) * inv;
+      if (f0 == 0u && lane == 0u) SB(alpha)[AT(alpha, e, k)] = p;
+      if (f < pc.F) acc += p * SB(z)[AT(z, j, k * pc.F + f)];
     }
-    if (f < pc.F) o[AT(o, i, k * pc.F + f)] = acc;
+    if (f < pc.F) SB(o)[AT(o, i, k * pc.F + f)] = acc;
   }
 }

@@ -20,17 +20,17 @@ void main() {
   uint item = subgroup_item();
   if (item >= pc.n * pc.H) return;
   uint i = item / pc.H, k = item % pc.H, lane = subgroup_lane();
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float S = 0.0;
   for (uint e = b; e < e1; ++e) {
-    uint j = uint(indices[e]);
+    uint j = uint(SB(indices)[e]);
     float d = 0.0;
-    for (uint f = lane; f < pc.F; f += SUBGROUP_SIZE) d += dout[AT(dout, i, k * pc.F + f)] * z[AT(z, j, k * pc.F + f)];
+    for (uint f = lane; f < pc.F; f += SUBGROUP_SIZE) d += SB(dout)[AT(dout, i, k * pc.F + f)] * SB(z)[AT(z, j, k * pc.F + f)];
     d = subgroupAdd(d);
-    S += alpha[AT(alpha, e, k)] * d;
-    if (lane == 0u) gs[AT(gs, e, k)] = d;
+    S += SB(alpha)[AT(alpha, e, k)] * d;
+    if (lane == 0u) SB(gs)[AT(gs, e, k)] = d;
   }
   if (lane != 0u) return;
   for (uint e = b; e < e1; ++e)
-    gs[AT(gs, e, k)] = pc.scale * alpha[AT(alpha, e, k)] * (gs[AT(gs, e, k)] - S);
+    SB(gs)[AT(gs, e, k)] = pc.scale * SB(alpha)[AT(alpha, e, k)] * (SB(gs)[AT(gs, e, k)] - S);
 }

@@ -12,24 +12,24 @@ layout(push_constant) uniform Push { uint n; uint H; uint F; VIEW(z); VIEW(o); V
 BUF(0, z);
 BUF(1, o);
 // coherent: the first lane parks the logits here for the whole subgroup.
-layout(std430, set = 0, binding = 2) coherent buffer Buf2 { ELEM alpha[]; };
+BUFC(2, alpha);
 IBUF(3, indptr);
 IBUF(4, indices);
 void main() {
   uint item = subgroup_item();
   if (item >= pc.n * pc.H) return;
   uint i = item / pc.H, k = item % pc.H, lane = subgroup_lane();
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float m = -1.0 / 0.0, s = 0.0;
   for (uint e = b; e < e1; ++e) {
-    uint j = uint(indices[e]);
+    uint j = uint(SB(indices)[e]);
     float d = 0.0;
-    for (uint f = lane; f < pc.F; f += SUBGROUP_SIZE) d += z[AT(z, i, k * pc.F + f)] * z[AT(z, j, k * pc.F + f)];
+    for (uint f = lane; f < pc.F; f += SUBGROUP_SIZE) d += SB(z)[AT(z, i, k * pc.F + f)] * SB(z)[AT(z, j, k * pc.F + f)];
     float x = pc.scale * subgroupAdd(d);
     float mn = max(m, x);
     s = s * exp(m - mn) + exp(x - mn);
     m = mn;
-    if (lane == 0u) alpha[AT(alpha, e, k)] = x;
+    if (lane == 0u) SB(alpha)[AT(alpha, e, k)] = x;
   }
   // Make the first lane's parked logits visible to the whole subgroup.
   subgroupMemoryBarrierBuffer();
@@ -39,13 +39,13 @@ void main() {
     uint f = f0 + lane;
     float acc = 0.0;
     for (uint e = b; e < e1; ++e) {
-      float p = exp(alpha[AT(alpha, e, k)] - m) * inv;
-      if (f < pc.F) acc += p * z[AT(z, uint(indices[e]), k * pc.F + f)];
+      float p = exp(SB(alpha)[AT(alpha, e, k)] - m) * inv;
+      if (f < pc.F) acc += p * SB(z)[AT(z, uint(SB(indices)[e]), k * pc.F + f)];
     }
-    if (f < pc.F) o[AT(o, i, k * pc.F + f)] = acc;
+    if (f < pc.F) SB(o)[AT(o, i, k * pc.F + f)] = acc;
   }
   subgroupMemoryBarrierBuffer();
   subgroupBarrier();
   if (lane == 0u)
-    for (uint e = b; e < e1; ++e) alpha[AT(alpha, e, k)] = exp(alpha[AT(alpha, e, k)] - m) * inv;
+    for (uint e = b; e < e1; ++e) SB(alpha)[AT(alpha, e, k)] = exp(SB(alpha)[AT(alpha, e, k)] - m) * inv;
 }

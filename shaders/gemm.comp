@@ -18,11 +18,11 @@ shared float As[TK][TM];
 shared float Bs[TK][TN];
 float load_a(uint i, uint k) {  // op(A)[i, k]
   if (i >= pc.M || k >= pc.K) return 0.0;
-  return pc.ta != 0u ? A[AT(a, k, i)] : A[AT(a, i, k)];
+  return pc.ta != 0u ? SB(A)[AT(a, k, i)] : SB(A)[AT(a, i, k)];
 }
 float load_b(uint k, uint j) {  // op(B)[k, j]
   if (k >= pc.K || j >= pc.N) return 0.0;
-  return pc.tb != 0u ? B[AT(b, j, k)] : B[AT(b, k, j)];
+  return pc.tb != 0u ? SB(B)[AT(b, j, k)] : SB(B)[AT(b, k, j)];
 }
 void main() {
   uint tx = gl_LocalInvocationID.x, ty = gl_LocalInvocationID.y;
@@ -56,7 +56,7 @@ void main() {
       uint c = col0 + tx + 16u * j;
       if (c >= pc.N) continue;
       uint idx = AT(c, r, c);
-      C[idx] = pc.beta == 0.0 ? pc.alpha * acc[i][j] : pc.alpha * acc[i][j] + pc.beta * C[idx];
+      SB(C)[idx] = pc.beta == 0.0 ? pc.alpha * acc[i][j] : pc.alpha * acc[i][j] + pc.beta * SB(C)[idx];
     }
   }
 }

@@ -12,8 +12,8 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  float k = -g[pc.g_off] * pc.inv_rows;
-  float pv = p[AT(p, r, c)];
+  float k = -SB(g)[pc.g_off] * pc.inv_rows;
+  float pv = SB(p)[AT(p, r, c)];
   float pc_ = pv > pc.eps ? pv : (isnan(pv) ? pv : pc.eps);
-  dp[AT(dp, r, c)] += k * (t[AT(t, r, c)] / pc_);
+  SB(dp)[AT(dp, r, c)] += k * (SB(t)[AT(t, r, c)] / pc_);
 }

@@ -11,15 +11,15 @@ BUF(2, o);
 void main() {
   float s = 0.0;
   uint n = pc.rows * pc.cols;
-  for (uint i = gl_LocalInvocationID.x; i < n; i += gl_WorkGroupSize.x) {
+  STRIDED_FOR(i, gl_LocalInvocationID.x, n, gl_WorkGroupSize.x) {
     uint r = i / pc.cols, c = i % pc.cols;
-    float tc = t[AT(t, r, c)];
+    float tc = SB(t)[AT(t, r, c)];
     if (tc > 0.0) {
-      float pv = p[AT(p, r, c)];
+      float pv = SB(p)[AT(p, r, c)];
       float pc_ = pv > pc.eps ? pv : (isnan(pv) ? pv : pc.eps);
       s += tc * (log(tc) - log(pc_));
     }
   }
   s = workgroup_sum(s);
-  if (gl_LocalInvocationID.x == 0u) o[pc.o_off] = pc.rows == 0u ? 0.0 : s / float(pc.rows);
+  if (gl_LocalInvocationID.x == 0u) SB(o)[pc.o_off] = pc.rows == 0u ? 0.0 : s / float(pc.rows);
 }

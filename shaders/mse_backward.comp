@@ -12,6 +12,6 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  float k = g[pc.g_off] * 2.0 * pc.inv_n;
-  dp[AT(dp, r, c)] += k * (p[AT(p, r, c)] - t[AT(t, r, c)]);
+  float k = SB(g)[pc.g_off] * 2.0 * pc.inv_n;
+  SB(dp)[AT(dp, r, c)] += k * (SB(p)[AT(p, r, c)] - SB(t)[AT(t, r, c)]);
 }

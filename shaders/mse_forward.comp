@@ -11,11 +11,11 @@ BUF(2, o);
 void main() {
   float s = 0.0;
   uint n = pc.rows * pc.cols;
-  for (uint i = gl_LocalInvocationID.x; i < n; i += gl_WorkGroupSize.x) {
+  STRIDED_FOR(i, gl_LocalInvocationID.x, n, gl_WorkGroupSize.x) {
     uint r = i / pc.cols, c = i % pc.cols;
-    float d = p[AT(p, r, c)] - t[AT(t, r, c)];
+    float d = SB(p)[AT(p, r, c)] - SB(t)[AT(t, r, c)];
     s += d * d;
   }
   s = workgroup_sum(s);
-  if (gl_LocalInvocationID.x == 0u) o[pc.o_off] = n == 0u ? 0.0 : s / float(n);
+  if (gl_LocalInvocationID.x == 0u) SB(o)[pc.o_off] = n == 0u ? 0.0 : s / float(n);
 }

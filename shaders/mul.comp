@@ -11,5 +11,5 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  y[AT(y, r, c)] = a[AT(a, r, c)] * b[AT(b, r, c)];
+  SB(y)[AT(y, r, c)] = SB(a)[AT(a, r, c)] * SB(b)[AT(b, r, c)];
 }

@@ -11,5 +11,5 @@ void main() {
   uint i = flat_id();
   if (i >= pc.rows * pc.cols) return;
   uint r = i / pc.cols, c = i % pc.cols;
-  da[AT(da, r, c)] += b[AT(b, r, c)] * dy[AT(dy, r, c)];
+  SB(da)[AT(da, r, c)] += SB(b)[AT(b, r, c)] * SB(dy)[AT(dy, r, c)];
 }

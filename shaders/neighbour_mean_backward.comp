@@ -15,9 +15,9 @@ void main() {
   if (id >= pc.n * pc.C) return;
   uint j = id / pc.C, c = id % pc.C;
   float acc = 0.0;
-  for (uint t = uint(out_ptr[j]); t < uint(out_ptr[j + 1u]); ++t) {
-    uint i = uint(out_dst[t]);
-    acc += dout[AT(dout, i, c)] / float(indptr[i + 1u] - indptr[i]);
+  STRIDED_FOR(t, uint(SB(out_ptr)[j]), uint(SB(out_ptr)[j + 1u]), 1u) {
+    uint i = uint(SB(out_dst)[t]);
+    acc += SB(dout)[AT(dout, i, c)] / float(SB(indptr)[i + 1u] - SB(indptr)[i]);
   }
-  dx[AT(dx, j, c)] += acc;
+  SB(dx)[AT(dx, j, c)] += acc;
 }

@@ -13,8 +13,8 @@ void main() {
   uint id = flat_id();
   if (id >= pc.n * pc.C) return;
   uint i = id / pc.C, c = id % pc.C;
-  uint b = uint(indptr[i]), e1 = uint(indptr[i + 1u]);
+  uint b = uint(SB(indptr)[i]), e1 = uint(SB(indptr)[i + 1u]);
   float acc = 0.0;
-  for (uint e = b; e < e1; ++e) acc += x[AT(x, uint(indices[e]), c)];
-  o[AT(o, i, c)] = b == e1 ? 0.0 : acc / float(e1 - b);
+  STRIDED_FOR(e, b, e1, 1u) acc += SB(x)[AT(x, uint(SB(indices)[e]), c)];
+  SB(o)[AT(o, i, c)] = b == e1 ? 0.0 : acc / float(e1 - b);
 }

@@ -12,8 +12,8 @@ void main() {
   if (r >= pc.rows) return;
   uint lane = subgroup_lane();
   float d = 0.0;
-  for (uint c = lane; c < pc.cols; c += SUBGROUP_SIZE) d += y[AT(y, r, c)] * dy[AT(dy, r, c)];
+  STRIDED_FOR(c, lane, pc.cols, SUBGROUP_SIZE) d += SB(y)[AT(y, r, c)] * SB(dy)[AT(dy, r, c)];
   d = subgroupAdd(d);
-  for (uint c = lane; c < pc.cols; c += SUBGROUP_SIZE)
-    dx[AT(dx, r, c)] += y[AT(y, r, c)] * (dy[AT(dy, r, c)] - d);
+  STRIDED_FOR(c, lane, pc.cols, SUBGROUP_SIZE)
+    SB(dx)[AT(dx, r, c)] += SB(y)[AT(y, r, c)] * (SB(dy)[AT(dy, r, c)] - d);
 }

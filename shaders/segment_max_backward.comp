@@ -5,12 +5,12 @@
 #include "elementwise.glsl"
 layout(push_constant) uniform Push { uint S; uint C; VIEW(dout); VIEW(am); VIEW(dx); } pc;
 BUF(0, dout);
-layout(std430, set = 0, binding = 1) readonly buffer ArgMax { int am[]; };
+IBUF(1, am);
 BUF(2, dx);
 void main() {
   uint id = flat_id();
   if (id >= pc.S * pc.C) return;
   uint s = id / pc.C, c = id % pc.C;
-  int r = am[AT(am, s, c)];
-  if (r >= 0) dx[AT(dx, uint(r), c)] += dout[AT(dout, s, c)];
+  int r = SB(am)[AT(am, s, c)];
+  if (r >= 0) SB(dx)[AT(dx, uint(r), c)] += SB(dout)[AT(dout, s, c)];
 }

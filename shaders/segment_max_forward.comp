@@ -8,26 +8,26 @@
 layout(push_constant) uniform Push { uint S; uint C; VIEW(x); VIEW(o); VIEW(am); } pc;
 BUF(0, x);
 BUF(1, o);
-layout(std430, set = 0, binding = 2) buffer ArgMax { int am[]; };
+IBUFW(2, am);
 IBUF(3, seg);
 void main() {
   uint id = flat_id();
   if (id >= pc.S * pc.C) return;
   uint s = id / pc.C, c = id % pc.C;
-  uint r0 = uint(seg[s]), r1 = uint(seg[s + 1u]);
+  uint r0 = uint(SB(seg)[s]), r1 = uint(SB(seg)[s + 1u]);
   float best = 0.0;
   int idx = -1;
   if (r0 < r1) {
-    best = x[AT(x, r0, c)];
+    best = SB(x)[AT(x, r0, c)];
     idx = int(r0);
-    for (uint r = r0 + 1u; r < r1; ++r) {
-      float v = x[AT(x, r, c)];
+    STRIDED_FOR(r, r0 + 1u, r1, 1u) {
+      float v = SB(x)[AT(x, r, c)];
       if (v > best || (isnan(v) && !isnan(best))) {
         best = v;
         idx = int(r);
       }
     }
   }
-  o[AT(o, s, c)] = best;
-  am[AT(am, s, c)] = idx;
+  SB(o)[AT(o, s, c)] = best;
+  SB(am)[AT(am, s, c)] = idx;
 }

@@ -10,7 +10,7 @@ BUF(1, o);
 void main() {
   float s = 0.0;
   uint n = pc.rows * pc.cols;
-  for (uint i = gl_LocalInvocationID.x; i < n; i += gl_WorkGroupSize.x) s += x[AT(x, i / pc.cols, i % pc.cols)];
+  STRIDED_FOR(i, gl_LocalInvocationID.x, n, gl_WorkGroupSize.x) s += SB(x)[AT(x, i / pc.cols, i % pc.cols)];
   s = workgroup_sum(s);
-  if (gl_LocalInvocationID.x == 0u) o[pc.o_off] = s;
+  if (gl_LocalInvocationID.x == 0u) SB(o)[pc.o_off] = s;
 }

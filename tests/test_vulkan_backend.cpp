@@ -1,6 +1,9 @@
 // Every Backend entry implemented on Vulkan against the CPU backend on random
 // data and random graphs (isolated nodes, a high-degree row, a batch),
 // forward and backward, accumulating outputs seeded with random values.
+// ctest runs it again with GATCORE_VK_MAX_BINDING_BYTES=256 at every
+// LP_NATIVE_VECTOR_WIDTH (*_smallbind): then the same comparisons cover the
+// large-operand paths (row-chunked elementwise ops, device-address shaders).
 #include <random>
 
 #include "gatcore/graph.hpp"
@@ -46,6 +49,7 @@ std::vector<CsrGraph> test_graphs() {
 
 TEST_CASE("vulkan: elementwise, activations, bias, column sums, scalars", "[vulkan]") {
   if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;
   std::mt19937 rng(1);
   const std::int64_t n = 37, c = 13;
   Tensor a = rnd(n, c, rng), b = rnd(n, c, rng), y0 = rnd(n, c, rng);
@@ -113,10 +117,12 @@ TEST_CASE("vulkan: elementwise, activations, bias, column sums, scalars", "[vulk
     gpu().add_scalar_accumulate(sg, -0.5f, yg);
     require_close(yc, yg, 1e-5f, 1e-5f, "add_scalar_accumulate");
   }
+  large_paths.require();
 }
 
 TEST_CASE("vulkan: gemm, all transpose combinations and strided views", "[vulkan]") {
   if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;
   std::mt19937 rng(2);
   for (auto [M, N, K] : {std::array<int, 3>{1, 1, 1}, {70, 33, 129}, {5, 130, 17}}) {
     for (int ta = 0; ta < 2; ++ta)
@@ -134,10 +140,12 @@ TEST_CASE("vulkan: gemm, all transpose combinations and strided views", "[vulkan
         }
       }
   }
+  large_paths.require();
 }
 
 TEST_CASE("vulkan: row softmax, losses, adam", "[vulkan]") {
   if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;
   std::mt19937 rng(3);
   const std::int64_t n = 29, c = 11;
   Tensor x = rnd(n, c, rng, -3.f, 3.f), d = rnd(n, c, rng), g0 = rnd(n, c, rng);
@@ -183,10 +191,12 @@ TEST_CASE("vulkan: row softmax, losses, adam", "[vulkan]") {
   require_close(P, Pg, 1e-5f, 1e-6f, "adam param");
   require_close(M, Mg, 1e-5f, 1e-6f, "adam m");
   require_close(Vv, Vg, 1e-5f, 1e-7f, "adam v");
+  large_paths.require();
 }
 
 TEST_CASE("vulkan: attention projection, edge softmax, aggregation, fused GAT", "[vulkan]") {
   if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;
   std::mt19937 rng(4);
   const auto graphs = test_graphs();
   for (std::size_t gi = 0; gi < graphs.size(); ++gi) {
@@ -282,10 +292,12 @@ TEST_CASE("vulkan: attention projection, edge softmax, aggregation, fused GAT", 
       }
     }
   }
+  large_paths.require();
 }
 
 TEST_CASE("vulkan: batchnorm train / eval forward and backward", "[vulkan]") {
   if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;
   std::mt19937 rng(6);
   const std::int64_t n = 300, c = 7;
   Tensor x = rnd(n, c, rng, -2.f, 3.f), gamma = rnd(1, c, rng, .5f, 1.5f), beta = rnd(1, c, rng);
@@ -315,10 +327,12 @@ TEST_CASE("vulkan: batchnorm train / eval forward and backward", "[vulkan]") {
   require_close(dxc, dxg, 1e-4f, 1e-4f, "eval d_x");
   require_close(dgc, dgg, 1e-4f, 1e-4f, "eval d_gamma");
   require_close(dbc, dbg, 1e-4f, 1e-4f, "eval d_beta");
+  large_paths.require();
 }
 
 TEST_CASE("vulkan: pooling (segment max, broadcast, neighbour mean)", "[vulkan]") {
   if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;
   std::mt19937 rng(8);
   const std::int64_t n = 61, C = 9;
   Tensor x = rnd(n, C, rng);
@@ -365,4 +379,48 @@ TEST_CASE("vulkan: pooling (segment max, broadcast, neighbour mean)", "[vulkan]"
   require_close(dxc, dxg, 1e-5f, 1e-5f, "neighbour_mean_backward");
   REQUIRE_THROWS_WITH(gpu().broadcast_segments_forward(og, std::vector<std::int64_t>{0, 5}, bg),
                       Catch::Contains("seg_ptr"));
+  large_paths.require();
+}
+
+// lavapipe ends an invocation's loops after 65535 iterations in total; the
+// per-invocation edge and segment loops take 16 steps per iteration
+// (STRIDED_FOR), so a hub row of 70000 in-edges, walked up to three times,
+// still comes out whole.
+TEST_CASE("vulkan: a hub row past lavapipe's loop cap", "[vulkan]") {
+  if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;
+  std::mt19937 rng(6);
+  const std::int32_t hub = 70000, n = hub + 1;
+  std::vector<std::int32_t> src, dst;
+  for (std::int32_t j = 1; j < n; ++j) {
+    src.push_back(j);
+    dst.push_back(0);
+  }
+  const CsrGraph g = graph_from_edges(n, src, dst);
+  const std::int64_t E = g.num_edges(), Hh = 2, C = 4;
+  Tensor el = rnd(n, Hh, rng), er = rnd(n, Hh, rng), z = rnd(n, C, rng);
+  Tensor ac = Tensor::empty(E, Hh), ag = gpu().empty(E, Hh, DType::f32);
+  cpu().edge_softmax_additive_forward(g, el, er, 0.2f, ac);
+  gpu().edge_softmax_additive_forward(g, V(el), V(er), 0.2f, ag);
+  require_close(ac, ag, 1e-4f, 1e-7f, "edge_softmax_additive_forward");
+  Tensor oc = Tensor::empty(n, C), og = gpu().empty(n, C, DType::f32);
+  cpu().aggregate_forward(g, ac, z, oc);
+  gpu().aggregate_forward(g, ag, V(z), og);
+  require_close(oc, og, 1e-4f, 1e-6f, "aggregate_forward");
+  Tensor mc = Tensor::empty(n, C), mg = gpu().empty(n, C, DType::f32);
+  cpu().neighbour_mean_forward(g, z, mc);
+  gpu().neighbour_mean_forward(g, V(z), mg);
+  require_close(mc, mg, 1e-4f, 1e-6f, "neighbour_mean_forward");
+  // One segment of all n rows.
+  const std::vector<std::int64_t> seg = {0, n};
+  Tensor sc = Tensor::empty(1, C), sa = Tensor::empty(1, C, DType::i32);
+  Tensor sg = gpu().empty(1, C, DType::f32), sag = gpu().empty(1, C, DType::i32);
+  cpu().segment_max_forward(z, seg, sc, sa);
+  gpu().segment_max_forward(V(z), seg, sg, sag);
+  require_close(sc, sg, 0, 0, "segment_max_forward");
+  Tensor dxc = Tensor::zeros(1, C), dxg = gpu().zeros(1, C, DType::f32);
+  cpu().broadcast_segments_backward(z, seg, dxc);
+  gpu().broadcast_segments_backward(V(z), seg, dxg);
+  require_close(dxc, dxg, 1e-4f, 1e-3f, "broadcast_segments_backward");
+  large_paths.require();
 }

@@ -37,6 +37,7 @@ Var forward(const Model& m, const GraphPtr& g, const Var& x) {
 
 TEST_CASE("vulkan: Adam training of a 2-layer GAT matches the CPU", "[vulkan]") {
   if (!vkt::ready()) return;
+  const vkt::LargePaths large_paths;  // under the *_smallbind hook: the step ran the large-operand paths
   std::mt19937 rng(7);
   GraphPtr g = share(fixtures::grid_graph(12, 10, 2));
   const std::int64_t n = g->num_nodes;
@@ -84,4 +85,5 @@ TEST_CASE("vulkan: Adam training of a 2-layer GAT matches the CPU", "[vulkan]") 
   }
   REQUIRE(lc.back() < lc.front());
   for (std::size_t k = 0; k < pc.size(); ++k) vkt::require_close(pc[k], pg[k], 1e-3f, 1e-4f, "parameter");
+  large_paths.require();
 }

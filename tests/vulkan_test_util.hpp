@@ -37,6 +37,26 @@ inline bool ready() {
   return state == 1;
 }
 
+// Under the test hook GATCORE_VK_MAX_BINDING_BYTES (ctest's *_smallbind
+// variants) the binding range is tiny, so the parity tests run the
+// large-operand paths. A test makes a LargePaths at its start and calls
+// require() at its end: with the hook, its ops must have gone through them
+// (device-address shaders or row-chunked elementwise dispatches); without it,
+// through neither (every operand of the small parity tests fits a binding).
+struct LargePaths {
+  gatcore::vulkan::Stats before = gatcore::vulkan::stats();
+  void require() const {
+    const char* cap = std::getenv("GATCORE_VK_MAX_BINDING_BYTES");
+    const auto now = gatcore::vulkan::stats();
+    const std::uint64_t bda = now.bda_dispatches - before.bda_dispatches;
+    const std::uint64_t chunked = now.chunked_dispatches - before.chunked_dispatches;
+    INFO("device-address dispatches " << bda << ", chunked dispatches " << chunked
+                                      << " (GATCORE_VK_MAX_BINDING_BYTES=" << (cap ? cap : "unset") << ")");
+    if (cap && *cap) REQUIRE(bda + chunked > 0);
+    else REQUIRE(bda + chunked == 0);
+  }
+};
+
 inline gatcore::Tensor V(const gatcore::Tensor& t) { return gatcore::to(t, gatcore::Device::vulkan); }
 inline gatcore::Tensor H(const gatcore::Tensor& t) { return gatcore::to(t, gatcore::Device::cpu); }
 

@@ -32,6 +32,15 @@ struct DeviceInfo {
   std::string name;
   std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"
   std::uint32_t subgroup_size;
+  std::uint64_t max_storage_buffer_range = 0;  // the device's maxStorageBufferRange
+  // Set once the backend runs on the device (current_device()): the range a
+  // descriptor binding is given (maxStorageBufferRange, or less under the test
+  // hook GATCORE_VK_MAX_BINDING_BYTES) and whether bufferDeviceAddress is on.
+  // Operands past binding_range are chunked (elementwise ops) or reached by
+  // device address (every other op); without bufferDeviceAddress the latter
+  // throw an error naming the op and operand.
+  std::uint64_t binding_range = 0;
+  bool buffer_device_address = false;
 };
 // Devices the Vulkan loader reports (empty when no loader/driver/ICD).
 std::vector<DeviceInfo> list_devices();
@@ -54,6 +63,10 @@ void release_cached_memory();
 struct Stats {
   std::uint64_t submits = 0;          // queue submissions so far
   std::uint64_t dispatches = 0;       // compute dispatches recorded so far
+  // Of those, for operands past the device's binding range: through device
+  // addresses (_bda shaders), and parts of an elementwise op split into row chunks.
+  std::uint64_t bda_dispatches = 0;
+  std::uint64_t chunked_dispatches = 0;
   std::uint64_t barriers = 0;         // pipeline barriers recorded so far
   std::uint64_t device_allocations = 0;  // vkAllocateMemory calls (cache misses)
   std::uint64_t cached_bytes = 0;     // bytes held by free buffers in the cache

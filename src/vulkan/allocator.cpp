@@ -74,6 +74,7 @@ Buffer* create(std::uint64_t size, bool staging) {
   auto bi = make<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
   bi.size = size;
   bi.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  if (c.bda) bi.usage |= VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT_KHR;  // any buffer may be a _bda operand
   bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   VkResult r = vkCreateBuffer(c.device, &bi, nullptr, &b->buffer);
   if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY) out_of_memory(size, result_name(r));
@@ -92,6 +93,9 @@ Buffer* create(std::uint64_t size, bool staging) {
   auto ai = make<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
   ai.allocationSize = req.size;
   ai.memoryTypeIndex = static_cast<std::uint32_t>(type);
+  auto flags = make<VkMemoryAllocateFlagsInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO);
+  flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT_KHR;
+  if (c.bda) ai.pNext = &flags;
   r = vkAllocateMemory(c.device, &ai, nullptr, &b->memory);
   if (r != VK_SUCCESS) {
     vkDestroyBuffer(c.device, b->buffer, nullptr);
@@ -173,6 +177,16 @@ void destroy_all_buffers() {
 }
 
 std::uint64_t cached_bytes() { return g_cache.cached; }
+
+std::uint64_t device_address(Buffer* b) {
+  if (!b->address) {
+    Context& c = ctx();
+    auto info = make<VkBufferDeviceAddressInfoKHR>(VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO_KHR);
+    info.buffer = b->buffer;
+    b->address = c.get_address(c.device, &info);
+  }
+  return b->address;
+}
 
 std::shared_ptr<Storage> make_storage(std::uint64_t bytes) {
   auto s = std::make_shared<Storage>();

@@ -5,10 +5,18 @@
 //
 // Tensor views are bound at their (alignment-rounded) byte offset with the
 // residual element offset and row stride in push constants, so a binding
-// covers only the span a view touches. Elementwise ops split rows into chunks
-// whose spans fit maxStorageBufferRange (128 MiB on lavapipe), so tensors of
-// any size go through them; other ops require each operand's span to fit and
-// say so otherwise.
+// covers only the span a view touches.
+//
+// Large operands (a span past maxStorageBufferRange, 128 MiB on lavapipe, or
+// past GATCORE_VK_MAX_BINDING_BYTES): elementwise ops split rows into chunks
+// whose spans fit, so they need nothing from the device. Every other op (graph
+// kernels gather arbitrary neighbour rows, GEMM walks all of K, reductions and
+// BatchNorm walk all rows) runs its shader's _bda variant instead (stream.cpp):
+// the same source built with -DGATCORE_BDA, reaching each operand through its
+// 64-bit device address, so no window has to hold the whole operand and the
+// dispatch shape stays that of the small case. Chosen over several descriptor
+// windows per operand, which the gathers could only use by branching per
+// access, and over chunking output rows, which cannot split the gathered side.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -48,17 +56,17 @@ struct Launch {
   Launch& t(const Tensor& x, bool write, const char* what) {
     check_vk(x, what);
     const Context& c = ctx();
-    const Buffer* b = buffer_of(*x.storage());
+    Buffer* b = buffer_of(*x.storage());
     const std::uint64_t start = static_cast<std::uint64_t>(x.offset()) * 4;
     const std::uint64_t base = start - start % c.storage_align;
     const std::uint64_t span =
         x.rows() == 0 || x.cols() == 0 ? 4 : static_cast<std::uint64_t>((x.rows() - 1) * x.ld() + x.cols()) * 4;
     std::uint64_t range = start - base + span;
     range = std::min<std::uint64_t>((range + 3) / 4 * 4, b->size - base);
-    GATCORE_CHECK(range <= c.max_storage_range, "vulkan: ", what, " ", x.shape_str(), " spans ", range,
-                  " bytes, more than the device's maxStorageBufferRange (", c.max_storage_range,
-                  "); this op does not split its operands");
-    bindings.push_back({b->buffer, base, range, write});
+    // Shaders index 32-bit (SPIR-V access chains take signed indices).
+    GATCORE_CHECK(range / 4 < (std::uint64_t{1} << 31), "vulkan: ", what, " ", x.shape_str(), " spans ", range,
+                  " bytes; shaders index at most 2^31 elements per operand");
+    bindings.push_back({b->buffer, base, range, write, what, b});
     push.push_back(static_cast<std::uint32_t>((start - base) / 4));
     push.push_back(u32(x.ld(), "row stride"));
     return *this;
@@ -72,11 +80,12 @@ struct Launch {
     return *this;
   }
   // A whole device array (graph arrays).
-  Launch& raw(const Storage& s) {
-    const Buffer* b = buffer_of(s);
-    bindings.push_back({b->buffer, 0, std::min<std::uint64_t>(std::max<std::uint64_t>(s.bytes, 4), b->size), false});
-    GATCORE_CHECK(bindings.back().range <= ctx().max_storage_range,
-                  "vulkan: a graph array exceeds maxStorageBufferRange");
+  Launch& raw(const Storage& s, const char* what = "graph array") {
+    Buffer* b = buffer_of(s);
+    bindings.push_back(
+        {b->buffer, 0, std::min<std::uint64_t>(std::max<std::uint64_t>(s.bytes, 4), b->size), false, what, b});
+    GATCORE_CHECK(bindings.back().range / 4 < (std::uint64_t{1} << 31), "vulkan: ", what, " of ", s.bytes,
+                  " bytes: shaders index at most 2^31 elements per operand");
     return *this;
   }
   void run(const char* shader, std::uint64_t groups) {
@@ -105,20 +114,28 @@ struct EwArg {
 };
 
 // An elementwise shader over [rows, cols] with header (rows, cols), one view per
-// argument, then `extra` words; rows are split into chunks whose spans fit
-// maxStorageBufferRange.
+// argument, then `extra` words; rows are split into chunks whose spans fit a
+// binding (ctx().max_binding). Where not even one row fits, the whole range
+// goes to the _bda variant in one dispatch.
 void elementwise(const char* shader, std::int64_t rows, std::int64_t cols, const std::vector<EwArg>& args,
                  const std::vector<std::uint32_t>& extra) {
   if (rows == 0 || cols == 0) return;
   const Context& c = ctx();
   std::int64_t chunk = rows;
+  bool by_address = false;
   for (const EwArg& a : args) {
     if (!a.rowwise || !a.t.defined()) continue;
     const std::int64_t ld = std::max<std::int64_t>(a.t.ld(), 1);
-    const std::int64_t budget = static_cast<std::int64_t>(c.max_storage_range - c.storage_align) / 4 - cols;
-    GATCORE_CHECK(budget >= 0, "vulkan: a single row of ", a.what, " exceeds maxStorageBufferRange");
-    chunk = std::min(chunk, budget / ld + 1);
+    const std::int64_t budget = static_cast<std::int64_t>(c.max_binding - c.storage_align) / 4 - cols;
+    if (budget < 0) {
+      GATCORE_CHECK(c.bda, "vulkan: ", shader, ": a single row of ", a.what, " ", a.t.shape_str(),
+                    " exceeds the device's binding range (", c.max_binding, " bytes) and ", c.info.name,
+                    " has no bufferDeviceAddress");
+      by_address = true;
+    }
+    chunk = std::min(chunk, std::max<std::int64_t>(budget, 0) / ld + 1);
   }
+  if (by_address) chunk = rows;
   chunk = std::min<std::int64_t>(chunk, std::max<std::int64_t>(1, ((std::int64_t{1} << 31) - 1) / cols));
   for (std::int64_t r0 = 0; r0 < rows; r0 += chunk) {
     const std::int64_t r1 = std::min(rows, r0 + chunk);
@@ -130,6 +147,7 @@ void elementwise(const char* shader, std::int64_t rows, std::int64_t cols, const
     }
     l.push.insert(l.push.end(), extra.begin(), extra.end());
     l.per_invocation(shader, static_cast<std::uint64_t>((r1 - r0) * cols));
+    if (chunk < rows) ++stats_ref().chunked_dispatches;
   }
 }
 
@@ -194,11 +212,21 @@ class VulkanBackend final : public Backend {
     GATCORE_CHECK(K == K2 && C.rows() == M && C.cols() == N, "gemm: op(A) [", M, ", ", K, "] x op(B) [", K2, ", ",
                   N, "] into C ", C.shape_str());
     if (M == 0 || N == 0) return;
-    Launch l;
-    l.u(M).u(N).u(K).t(A, false, "gemm: A").t(B, false, "gemm: B").t(C, true, "gemm: C");
-    l.u(ta).u(tb).f(alpha).f(beta);
-    const std::uint32_t gx = static_cast<std::uint32_t>((N + 63) / 64), gy = static_cast<std::uint32_t>((M + 63) / 64);
-    dispatch("gemm", l.bindings, l.push.data(), static_cast<std::uint32_t>(l.push.size() * 4), gx, gy, 1);
+    // The shader walks K in 16-deep tiles, one loop iteration each; lavapipe
+    // ends an invocation's loops after 65535 iterations in total (see
+    // STRIDED_FOR in shaders/common.glsl), so K is split into slices of at
+    // most kMaxK, each accumulated into C (beta applies to the first).
+    constexpr std::int64_t kMaxK = 16 * 32768;
+    for (std::int64_t k0 = 0; k0 < std::max<std::int64_t>(K, 1); k0 += kMaxK) {
+      const std::int64_t k1 = std::min(K, k0 + kMaxK);
+      const Tensor a = K <= kMaxK ? A : ta ? A.rows_slice(k0, k1) : A.cols_slice(k0, k1);
+      const Tensor b = K <= kMaxK ? B : tb ? B.cols_slice(k0, k1) : B.rows_slice(k0, k1);
+      Launch l;
+      l.u(M).u(N).u(k1 - k0).t(a, false, "gemm: A").t(b, false, "gemm: B").t(C, true, "gemm: C");
+      l.u(ta).u(tb).f(alpha).f(k0 == 0 ? beta : 1.0f);
+      const std::uint32_t gx = static_cast<std::uint32_t>((N + 63) / 64), gy = static_cast<std::uint32_t>((M + 63) / 64);
+      dispatch("gemm", l.bindings, l.push.data(), static_cast<std::uint32_t>(l.push.size() * 4), gx, gy, 1);
+    }
   }
   void add_row_bias(const Tensor& bias, const Tensor& y) override {
     check_vk(bias, "add_row_bias: bias");

@@ -91,7 +91,9 @@ vulkan::DeviceInfo describe(VkPhysicalDevice pd, int index) {
   auto p2 = make<VkPhysicalDeviceProperties2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2);
   p2.pNext = &sg;
   vkGetPhysicalDeviceProperties2(pd, &p2);
-  return {index, p2.properties.deviceName, type_name(p2.properties.deviceType), sg.subgroupSize};
+  vulkan::DeviceInfo d{index, p2.properties.deviceName, type_name(p2.properties.deviceType), sg.subgroupSize};
+  d.max_storage_buffer_range = p2.properties.limits.maxStorageBufferRange;
+  return d;
 }
 
 std::string lower(std::string s) {
@@ -164,6 +166,14 @@ std::unique_ptr<Context> create_context(VkInstance inst, VkPhysicalDevice pd, co
                 "vulkan: device ", info.name, " lacks subgroup basic/arithmetic operations in compute shaders");
   c->subgroup_size = sg.subgroupSize;
   c->max_storage_range = c->props.limits.maxStorageBufferRange;
+  c->max_binding = c->max_storage_range;
+  if (const char* cap = std::getenv("GATCORE_VK_MAX_BINDING_BYTES"); cap && *cap) {
+    char* end = nullptr;
+    const unsigned long long v = std::strtoull(cap, &end, 10);
+    GATCORE_CHECK(end && *end == 0 && v >= 256, "vulkan: GATCORE_VK_MAX_BINDING_BYTES='", cap,
+                  "' must be a byte count >= 256");
+    c->max_binding = std::min<std::uint64_t>(c->max_binding, v);
+  }
   c->storage_align = std::max<std::uint64_t>(c->props.limits.minStorageBufferOffsetAlignment, 4);
   c->max_allocation = m3.maxMemoryAllocationSize;
   vkGetPhysicalDeviceMemoryProperties(pd, &c->mem_props);
@@ -193,11 +203,45 @@ std::unique_ptr<Context> create_context(VkInstance inst, VkPhysicalDevice pd, co
   qci.queueFamilyIndex = family;
   qci.queueCount = 1;
   qci.pQueuePriorities = &prio;
+  // Buffer device addresses let shaders reach operands larger than
+  // maxStorageBufferRange (the _bda shader variants). The extension form works
+  // on Vulkan 1.1 instances too; without it such operands are an error.
+  std::uint32_t next = 0;
+  vkEnumerateDeviceExtensionProperties(pd, nullptr, &next, nullptr);
+  std::vector<VkExtensionProperties> exts(next);
+  vkEnumerateDeviceExtensionProperties(pd, nullptr, &next, exts.data());
+  bool has_bda_ext = false;
+  for (const auto& e : exts)
+    if (std::strcmp(e.extensionName, VK_KHR_BUFFER_DEVICE_ADDRESS_EXTENSION_NAME) == 0) has_bda_ext = true;
+  auto bda = make<VkPhysicalDeviceBufferDeviceAddressFeaturesKHR>(
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_BUFFER_DEVICE_ADDRESS_FEATURES_KHR);
+  if (has_bda_ext) {
+    auto f2 = make<VkPhysicalDeviceFeatures2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2);
+    f2.pNext = &bda;
+    vkGetPhysicalDeviceFeatures2(pd, &f2);
+  }
+  c->bda = has_bda_ext && bda.bufferDeviceAddress && !env_flag("GATCORE_VK_NO_BDA");
   auto dci = make<VkDeviceCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO);
   dci.queueCreateInfoCount = 1;
   dci.pQueueCreateInfos = &qci;
+  const char* bda_ext = VK_KHR_BUFFER_DEVICE_ADDRESS_EXTENSION_NAME;
+  auto want = make<VkPhysicalDeviceBufferDeviceAddressFeaturesKHR>(
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_BUFFER_DEVICE_ADDRESS_FEATURES_KHR);
+  if (c->bda) {
+    want.bufferDeviceAddress = VK_TRUE;
+    dci.pNext = &want;
+    dci.enabledExtensionCount = 1;
+    dci.ppEnabledExtensionNames = &bda_ext;
+  }
   check(vkCreateDevice(pd, &dci, nullptr, &c->device), "vkCreateDevice");
   vkGetDeviceQueue(c->device, family, 0, &c->queue);
+  if (c->bda) {
+    c->get_address = reinterpret_cast<PFN_vkGetBufferDeviceAddressKHR>(
+        vkGetDeviceProcAddr(c->device, "vkGetBufferDeviceAddressKHR"));
+    c->bda = c->get_address != nullptr;
+  }
+  c->info.binding_range = c->max_binding;
+  c->info.buffer_device_address = c->bda;
   return c;
 }
 

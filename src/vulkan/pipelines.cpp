@@ -1,6 +1,7 @@
 // Compute pipelines, created on first use from the embedded SPIR-V and cached
-// by shader name. All pipelines share one layout: kMaxBindings storage buffers
-// in set 0 and a kPushBytes push-constant block. Specialisation constants:
+// by shader name (the _bda variant under "<name>_bda"). All pipelines share one
+// layout: kMaxBindings storage buffers plus the device-address table
+// (kAddrBinding) in set 0 and a kPushBytes push-constant block. Specialisation constants:
 //   constant_id 0  SUBGROUP_SIZE  (the device's subgroup size; lavapipe: 4/8/16
 //                                  with LP_NATIVE_VECTOR_WIDTH 128/256/512)
 //   constant_id 1  local_size_x   (workgroup size, a multiple of SUBGROUP_SIZE)
@@ -25,15 +26,15 @@ Pipelines g_p;
 void ensure_layout() {
   if (g_p.layout) return;
   Context& c = ctx();
-  VkDescriptorSetLayoutBinding b[kMaxBindings]{};
-  for (std::uint32_t i = 0; i < kMaxBindings; ++i) {
+  VkDescriptorSetLayoutBinding b[kMaxBindings + 1]{};
+  for (std::uint32_t i = 0; i <= kMaxBindings; ++i) {
     b[i].binding = i;
     b[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     b[i].descriptorCount = 1;
     b[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
   }
   auto sci = make<VkDescriptorSetLayoutCreateInfo>(VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO);
-  sci.bindingCount = kMaxBindings;
+  sci.bindingCount = kMaxBindings + 1;
   sci.pBindings = b;
   check(vkCreateDescriptorSetLayout(c.device, &sci, nullptr, &g_p.set_layout), "vkCreateDescriptorSetLayout");
   VkPushConstantRange pr{VK_SHADER_STAGE_COMPUTE_BIT, 0, kPushBytes};
@@ -58,13 +59,14 @@ VkDescriptorSetLayout set_layout() {
   return g_p.set_layout;
 }
 
-const Pipeline& pipeline(const char* shader) {
-  auto it = g_p.by_name.find(shader);
+const Pipeline& pipeline(const char* shader, bool bda) {
+  const std::string name = bda ? std::string(shader) + "_bda" : std::string(shader);
+  auto it = g_p.by_name.find(name);
   if (it != g_p.by_name.end()) return it->second;
   ensure_layout();
   Context& c = ctx();
-  const ShaderBlob* blob = find_shader(shader);
-  GATCORE_CHECK(blob != nullptr, "vulkan: shader '", shader, "' is not compiled into this build");
+  const ShaderBlob* blob = find_shader(name);
+  GATCORE_CHECK(blob != nullptr, "vulkan: shader '", name, "' is not compiled into this build");
   auto mci = make<VkShaderModuleCreateInfo>(VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO);
   mci.codeSize = blob->words * 4;
   mci.pCode = blob->code;
@@ -87,7 +89,7 @@ const Pipeline& pipeline(const char* shader) {
   const VkResult r = vkCreateComputePipelines(c.device, g_p.cache, 1, &ci, nullptr, &p.pipeline);
   vkDestroyShaderModule(c.device, module, nullptr);
   check(r, "vkCreateComputePipelines");
-  return g_p.by_name.emplace(shader, p).first->second;
+  return g_p.by_name.emplace(name, p).first->second;
 }
 
 void destroy_pipelines() {

@@ -46,6 +46,15 @@ struct Context {
   VkPhysicalDeviceMemoryProperties mem_props{};
   std::uint32_t subgroup_size = 32;
   std::uint64_t max_storage_range = 0;   // maxStorageBufferRange
+  // The largest range a descriptor binding is given: maxStorageBufferRange,
+  // or less when GATCORE_VK_MAX_BINDING_BYTES caps it (a test hook that sends
+  // small tensors through the large-buffer paths). Operands past it are
+  // chunked (elementwise ops) or reached by device address (the _bda shaders).
+  std::uint64_t max_binding = 0;
+  // bufferDeviceAddress (VK_KHR_buffer_device_address) is enabled; off when
+  // the device lacks it or GATCORE_VK_NO_BDA=1 is set.
+  bool bda = false;
+  PFN_vkGetBufferDeviceAddressKHR get_address = nullptr;
   std::uint64_t storage_align = 16;      // minStorageBufferOffsetAlignment
   std::uint64_t max_allocation = 0;      // maxMemoryAllocationSize (or heap size)
   bool unified = false;                  // buffers are host-visible (CPU / UMA device)
@@ -61,6 +70,7 @@ struct Buffer {
   std::uint64_t size = 0;    // allocated bytes (size class)
   void* mapped = nullptr;    // persistent map when host-visible
   bool host_visible = false;
+  std::uint64_t address = 0;  // device address (when ctx().bda), 0 until first asked
 };
 // A buffer of at least `bytes` (reused from the cache when possible). Throws
 // gatcore::Error("vulkan: out of device memory ...") when it cannot be had.
@@ -73,6 +83,8 @@ void recycle_pending_buffers();
 void free_cached_buffers();
 void destroy_all_buffers();
 std::uint64_t cached_bytes();
+// The buffer's device address (requires ctx().bda).
+std::uint64_t device_address(Buffer* b);
 
 // A Storage (Device::vulkan, host == nullptr) that owns a Buffer.
 std::shared_ptr<Storage> make_storage(std::uint64_t bytes);
@@ -85,12 +97,16 @@ void download(const Storage& s, std::uint64_t offset, std::uint64_t bytes, void*
 
 // ---- pipelines.cpp -------------------------------------------------------------
 constexpr std::uint32_t kMaxBindings = 10;
+// One more binding in the shared layout: the device-address table the _bda
+// shader variants read (GATCORE_ADDR_BINDING in shaders/elementwise.glsl).
+constexpr std::uint32_t kAddrBinding = kMaxBindings;
 constexpr std::uint32_t kPushBytes = 128;
 struct Pipeline {
   VkPipeline pipeline = VK_NULL_HANDLE;
   std::uint32_t wg_size = 256;  // local_size_x (specialisation constant 1)
 };
-const Pipeline& pipeline(const char* shader);
+// `bda`: the device-address variant (shaders/<name>.comp built with -DGATCORE_BDA).
+const Pipeline& pipeline(const char* shader, bool bda = false);
 VkPipelineLayout pipeline_layout();
 VkDescriptorSetLayout set_layout();
 void destroy_pipelines();
@@ -102,9 +118,15 @@ struct Binding {
   std::uint64_t offset = 0;
   std::uint64_t range = 0;
   bool write = false;
+  const char* what = "operand";  // for errors
+  Buffer* owner = nullptr;       // for its device address
 };
 // Records one dispatch into the current command buffer, with a barrier first
 // when it touches a buffer written (or writes one read) since the last barrier.
+// When a binding's range exceeds ctx().max_binding the shader's _bda variant
+// runs instead, its buffers addressed through a table of device addresses
+// (throws, naming the shader and operand, when the device has no
+// bufferDeviceAddress).
 void dispatch(const char* shader, const std::vector<Binding>& bindings, const void* push, std::uint32_t push_bytes,
               std::uint32_t groups_x, std::uint32_t groups_y = 1, std::uint32_t groups_z = 1);
 // Records a buffer copy (transfer) with the barriers it needs.

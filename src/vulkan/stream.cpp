@@ -8,6 +8,13 @@
 // A batch is also submitted (and waited for) once it holds kMaxBatch
 // dispatches, or once buffers released during it exceed kMaxPendingBytes
 // (allocator.cpp), so a long host-read-free loop cannot grow without bound.
+//
+// Operands larger than a descriptor binding may cover (ctx().max_binding):
+// the dispatch runs the shader's _bda variant, which reads each operand's
+// device address (buffer address + binding offset) from a small table bound
+// at kAddrBinding. Tables are carved from host-visible buffers that live until
+// the batch completes; the submission makes the host writes visible.
+#include <cstring>
 #include <unordered_set>
 
 #include "src/vulkan/runtime.hpp"
@@ -27,6 +34,11 @@ struct Stream {
   std::unordered_set<VkBuffer> written, read;
   Buffer* dummy = nullptr;
   VkPipeline bound = VK_NULL_HANDLE;
+  // Address tables (host-visible), kept across batches so a warmed-up step
+  // allocates nothing: addr_bufs[0..addr_cur] are in use by this batch.
+  std::vector<Buffer*> addr_bufs;
+  std::size_t addr_cur = 0;
+  std::uint64_t addr_used = 0;  // bytes used in addr_bufs[addr_cur]
 };
 Stream g_s;
 vulkan::Stats g_stats;
@@ -35,7 +47,7 @@ constexpr std::uint32_t kSetsPerPool = 1024;
 constexpr std::uint64_t kMaxBatch = 8192;
 
 VkDescriptorPool new_desc_pool() {
-  VkDescriptorPoolSize ps{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * kMaxBindings};
+  VkDescriptorPoolSize ps{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * (kMaxBindings + 1)};
   auto ci = make<VkDescriptorPoolCreateInfo>(VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO);
   ci.maxSets = kSetsPerPool;
   ci.poolSizeCount = 1;
@@ -109,6 +121,29 @@ VkDescriptorSet alloc_set() {
   }
 }
 
+constexpr std::uint64_t kAddrBufBytes = 64 * 1024;
+constexpr std::uint64_t kAddrTableBytes = kMaxBindings * 8;  // one uvec2 per binding slot
+
+// A slot for one dispatch's address table: (buffer, offset) filled with the
+// bindings' device addresses; unused slots hold 0 (never dereferenced).
+std::pair<Buffer*, std::uint64_t> address_table(const std::vector<Binding>& bindings) {
+  const std::uint64_t align = ctx().storage_align;
+  const std::uint64_t slot = (kAddrTableBytes + align - 1) / align * align;
+  if (g_s.addr_bufs.empty()) g_s.addr_bufs.push_back(acquire_buffer(kAddrBufBytes, true));
+  if (g_s.addr_used + slot > g_s.addr_bufs[g_s.addr_cur]->size) {
+    if (++g_s.addr_cur == g_s.addr_bufs.size()) g_s.addr_bufs.push_back(acquire_buffer(kAddrBufBytes, true));
+    g_s.addr_used = 0;
+  }
+  Buffer* b = g_s.addr_bufs[g_s.addr_cur];
+  const std::uint64_t off = g_s.addr_used;
+  g_s.addr_used += slot;
+  std::uint64_t table[kMaxBindings] = {};
+  for (std::size_t i = 0; i < bindings.size(); ++i)
+    if (bindings[i].buffer) table[i] = device_address(bindings[i].owner) + bindings[i].offset;
+  std::memcpy(static_cast<char*>(b->mapped) + off, table, kAddrTableBytes);
+  return {b, off};
+}
+
 }  // namespace
 
 vulkan::Stats& stats_ref() { return g_stats; }
@@ -124,7 +159,18 @@ void dispatch(const char* shader, const std::vector<Binding>& bindings, const vo
   GATCORE_CHECK(gx <= c.props.limits.maxComputeWorkGroupCount[0] && gy <= c.props.limits.maxComputeWorkGroupCount[1] &&
                     gz <= c.props.limits.maxComputeWorkGroupCount[2],
                 "vulkan: ", shader, ": dispatch of ", gx, "x", gy, "x", gz, " workgroups exceeds the device limit");
-  const Pipeline& p = pipeline(shader);
+  // Any operand past the binding range: the device-address variant.
+  const Binding* big = nullptr;
+  for (const Binding& b : bindings)
+    if (b.buffer && b.range > c.max_binding && (!big || b.range > big->range)) big = &b;
+  GATCORE_CHECK(!big || c.bda, "vulkan: ", shader, ": ", big ? big->what : "", " spans ", big ? big->range : 0,
+                " bytes, more than the device's binding range (maxStorageBufferRange ", c.max_storage_range,
+                ", used ", c.max_binding, "), and ", c.info.name,
+                " has no bufferDeviceAddress to reach it otherwise");
+  const bool bda = big != nullptr;
+  const Pipeline& p = pipeline(shader, bda);
+  // Before begin(): acquiring a table buffer may flush the batch.
+  const auto table = bda ? address_table(bindings) : std::pair<Buffer*, std::uint64_t>{nullptr, 0};
   begin();
   std::vector<std::pair<VkBuffer, bool>> access;
   for (const Binding& b : bindings)
@@ -132,13 +178,19 @@ void dispatch(const char* shader, const std::vector<Binding>& bindings, const vo
   order(access);
 
   VkDescriptorSet set = alloc_set();
-  VkDescriptorBufferInfo infos[kMaxBindings];
-  VkWriteDescriptorSet writes[kMaxBindings];
-  for (std::uint32_t i = 0; i < kMaxBindings; ++i) {
-    const bool real = i < bindings.size() && bindings[i].buffer;
+  VkDescriptorBufferInfo infos[kMaxBindings + 1];
+  VkWriteDescriptorSet writes[kMaxBindings + 1];
+  for (std::uint32_t i = 0; i <= kMaxBindings; ++i) {
+    // The _bda variant declares no binding but the table; all others get the dummy.
+    const bool real = !bda && i < bindings.size() && bindings[i].buffer;
     infos[i].buffer = real ? bindings[i].buffer : g_s.dummy->buffer;
     infos[i].offset = real ? bindings[i].offset : 0;
     infos[i].range = real ? bindings[i].range : 256;
+    if (i == kAddrBinding && bda) {
+      infos[i].buffer = table.first->buffer;
+      infos[i].offset = table.second;
+      infos[i].range = kAddrTableBytes;
+    }
     writes[i] = make<VkWriteDescriptorSet>(VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET);
     writes[i].dstSet = set;
     writes[i].dstBinding = i;
@@ -146,7 +198,7 @@ void dispatch(const char* shader, const std::vector<Binding>& bindings, const vo
     writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[i].pBufferInfo = &infos[i];
   }
-  vkUpdateDescriptorSets(c.device, kMaxBindings, writes, 0, nullptr);
+  vkUpdateDescriptorSets(c.device, kMaxBindings + 1, writes, 0, nullptr);
   if (g_s.bound != p.pipeline) {
     vkCmdBindPipeline(g_s.cb, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline);
     g_s.bound = p.pipeline;
@@ -155,6 +207,7 @@ void dispatch(const char* shader, const std::vector<Binding>& bindings, const vo
   if (push_bytes) vkCmdPushConstants(g_s.cb, pipeline_layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
   vkCmdDispatch(g_s.cb, gx, gy, gz);
   ++g_stats.dispatches;
+  if (bda) ++g_stats.bda_dispatches;
   ++g_s.batch_dispatches;
 }
 
@@ -189,6 +242,8 @@ void flush() {
   g_s.batch_dispatches = 0;
   g_s.written.clear();
   g_s.read.clear();
+  g_s.addr_cur = 0;
+  g_s.addr_used = 0;
   recycle_pending_buffers();
 }
 
@@ -196,6 +251,7 @@ void destroy_stream() {
   if (!has_ctx()) return;
   flush();
   Context& c = ctx();
+  for (Buffer* b : g_s.addr_bufs) release_buffer(b);
   for (VkDescriptorPool p : g_s.desc_pools) vkDestroyDescriptorPool(c.device, p, nullptr);
   if (g_s.fence) vkDestroyFence(c.device, g_s.fence, nullptr);
   if (g_s.pool) vkDestroyCommandPool(c.device, g_s.pool, nullptr);
