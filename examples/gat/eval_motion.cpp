@@ -43,7 +43,8 @@ int usage(int rc) {
                "  --cm-per-unit X  centimetres per world unit (default: 100 for glTF files, whose unit is the\n"
                "                   metre; unknown for other sources unless given)\n"
                "  --errormaps DIR  per-vertex error colour maps (PNG) of N frames (default 2) of the first\n"
-               "                   motion per character and method, one colour scale per frame (LBS's max)\n"
+               "                   motion per character and method, one colour scale per frame: blue 0, red\n"
+               "                   the 99th percentile of LBS's error in that frame (in the JSON) and above\n"
                "  --loss-curve LABEL=LOG  plots the train / validation loss per epoch of a `gat train` log\n"
                "                   (its 'epoch N/M  train loss X  val loss Y' lines) to DIR/loss_LABEL.png\n");
   return rc;
@@ -204,7 +205,7 @@ int gat::eval_motion(int argc, char** argv) {
   const std::size_t K = methods.size();
   if (!map_dir.empty()) fs::create_directories(map_dir);
 
-  nlohmann::json rows = nlohmann::json::array();
+  nlohmann::json rows = nlohmann::json::array(), maps = nlohmann::json::array();
   std::vector<Acc> overall(K), overall_cm(K);
   bool all_cm = true;
   struct Row {
@@ -274,12 +275,21 @@ int gat::eval_motion(int argc, char** argv) {
               world[std::size_t(3 * v + a)] = float((raw.lbs.at(v, a) + raw.target.at(v, a)) * to_world);
           RenderOptions ro;
           ro.width = ro.height = int(map_size);
-          ro.max_error = *std::max_element(err[0].begin(), err[0].end());
+          // One colour scale for every method of this frame: the 99th
+          // percentile of LBS's error (a few reference outliers would
+          // otherwise turn everything blue); larger errors are clamped (red).
+          std::vector<float> sorted = err[0];
+          const std::size_t q = std::min(sorted.size() - 1, std::size_t(0.99 * double(sorted.size())));
+          std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(q), sorted.end());
+          ro.max_error = std::max(sorted[q], 1e-12f);
           for (std::size_t k = 0; k < K; ++k) {
             std::string name = row.character + "_" + stem(motions[mi].name) + "_f" + std::to_string(f) + "_" + methods[k];
             std::replace(name.begin(), name.end(), '/', '_');
             write_png((fs::path(map_dir) / (name + ".png")).string(),
                       render_error_map(world, pc.character.mesh.triangles, err[k], ro));
+            maps.push_back({{"file", name + ".png"}, {"character", row.character}, {"motion", motions[mi].name},
+                            {"frame", f}, {"method", methods[k]}, {"colour_scale_top", ro.max_error},
+                            {"colour_scale_top_cm", cm > 0 ? ro.max_error * cm : 0.0}});
           }
         }
       }
@@ -343,6 +353,7 @@ int gat::eval_motion(int argc, char** argv) {
       rows.push_back(rj);
     }
   j["rows"] = rows;
+  j["errormaps"] = maps;
   for (std::size_t k = 0; k < K; ++k) {
     j["overall"][methods[k]] = stats_json(overall[k], 0);
     if (all_cm) {
