@@ -37,7 +37,7 @@ done
 case "$budget" in
   ci)   : "${DG_MINUTES:=0}" "${DG_EPOCHS:=1}" "${DG_POSES:=1}" "${DG_SUBSAMPLE:=200}" "${DG_STRIDE:=172}"
         : "${DG_MAPFRAMES:=1}" ;;
-  full) : "${DG_MINUTES:=6}" "${DG_EPOCHS:=100000}" "${DG_POSES:=4}" "${DG_SUBSAMPLE:=1000}" "${DG_STRIDE:=8}"
+  full) : "${DG_MINUTES:=9}" "${DG_EPOCHS:=100000}" "${DG_POSES:=4}" "${DG_SUBSAMPLE:=1000}" "${DG_STRIDE:=8}"
         : "${DG_MAPFRAMES:=2}" ;;
   *) echo "densegats.sh: --budget expects ci or full, got '$budget'" >&2; exit 2 ;;
 esac
