@@ -28,6 +28,9 @@ void usage(std::FILE* f) {
                "  --random-poses N (32)  --pose-angle RAD (0.5)  --motion-stride K (4)  --seed S (0)\n"
                "  --subsample M (1000)   --validation F (0.1)    --test F (0.1)\n"
                "  --dm-iterations I (10) --dm-step S (0.5)       --skip-bad (skip unreadable characters)\n"
+               "  --joint-limits FILE|humanoid  per-joint random-pose limits (JSON table, see\n"
+               "             include/gatcore/character/joint_limits.hpp; 'humanoid' = the built-in table);\n"
+               "             recorded in the dataset; without it every joint axis gets +-pose-angle\n"
                "usage: gat dataset export-character CHARACTER -o OUT.glb\n"
                "  writes a dataset character (e.g. procedural:humanoid:5) as a skinned glTF file\n");
 }
@@ -97,6 +100,7 @@ int cmd_dataset(int argc, char** argv) {
     else if (a == "--dm-iterations") s.delta_mush.iterations = static_cast<int>(number(0, 10000));
     else if (a == "--dm-step") s.delta_mush.step = static_cast<float>(number(1e-6, 1));
     else if (a == "--skip-bad") skip_bad = true;
+    else if (a == "--joint-limits") s.joint_limits = load_joint_limits(value());
     else if (!a.empty() && a[0] == '-') throw gatcore::InvalidArgument("unknown option '" + a + "'");
     else inputs.push_back(a);
   }
@@ -138,9 +142,11 @@ int cmd_dataset(int argc, char** argv) {
   }
   const DatasetDescription d = describe_dataset(good, motions, s);
   save_dataset(out, d);
-  std::printf("%s: %zu characters (train %zu, validation %zu, test %zu), %zu motions, Delta Mush %d x %g\n", out.c_str(),
-              d.characters.size(), d.split.train.size(), d.split.validation.size(), d.split.test.size(),
-              d.motions.size(), d.delta_mush.iterations, d.delta_mush.step);
+  std::printf("%s: %zu characters (train %zu, validation %zu, test %zu), %zu motions, Delta Mush %d x %g, "
+              "random poses within %s\n", out.c_str(), d.characters.size(), d.split.train.size(),
+              d.split.validation.size(), d.split.test.size(), d.motions.size(), d.delta_mush.iterations,
+              d.delta_mush.step,
+              d.joint_limits ? ("joint limits '" + d.joint_limits->name + "'").c_str() : "+-pose-angle per joint axis");
   return 0;
 }
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "eval_motion.hpp"
 #include "gatcore/character/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
@@ -31,13 +32,18 @@ int usage(int rc) {
                "  --data DATASET  evaluate on a dataset's characters instead (default: the dataset the\n"
                "                  checkpoint was trained on, if any); displacement: N poses per character\n"
                "  --part P        test (default), validation or train characters of the dataset\n"
-               "  --device D      cpu (default), vulkan or auto: where the model runs (see gat train --help)\n");
+               "  --device D      cpu (default), vulkan or auto: where the model runs (see gat train --help)\n"
+               "  --motion M.bvh  evaluate displacement models and the LBS / DQS baselines on every frame of\n"
+               "                  retargeted motions instead (gat eval --motion X --help for its options)\n");
   return rc;
 }
 
 }  // namespace
 
 int gat::cmd_eval(int argc, char** argv) {
+  // Motion evaluation against the reference deformer, with baselines (eval_motion.cpp).
+  for (int i = 1; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--motion")) return gat::eval_motion(argc, argv);
   std::string path, data, part = "test", device = "cpu";
   long samples = 16, seed = 12345;
   for (int i = 1; i < argc; ++i) {

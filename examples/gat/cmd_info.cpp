@@ -90,7 +90,11 @@ void print_dataset(const std::string& path, const DatasetDescription& d) {
   }
   std::printf("motions    %zu (every %d-th frame)\n", d.motions.size(), d.motion_stride);
   for (const auto& m : d.motions) std::printf("  %s\n", m.c_str());
-  std::printf("poses      %d random per character per epoch, +-%g rad per joint axis\n", d.random_poses, d.pose_angle);
+  if (d.joint_limits)
+    std::printf("poses      %d random per character per epoch, within joint limits '%s' (%zu rules)\n",
+                d.random_poses, d.joint_limits->name.c_str(), d.joint_limits->rules.size());
+  else
+    std::printf("poses      %d random per character per epoch, +-%g rad per joint axis\n", d.random_poses, d.pose_angle);
   std::printf("reference  Delta Mush, %d iterations, step %g\n", d.delta_mush.iterations, d.delta_mush.step);
   std::printf("subsample  %lld consecutive vertices per sample\n", static_cast<long long>(d.subsample));
 }

@@ -44,7 +44,7 @@ int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
                "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
-               "                 [--device cpu|vulkan|auto] [--loss-curve FILE.png]\n"
+               "                 [--device cpu|vulkan|auto] [--minutes M] [--loss-curve FILE.png]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
@@ -59,6 +59,8 @@ int usage(int rc) {
                "  --threads T    OpenMP threads (default: all cores)\n"
                "  --batch B      characters per batch (default: paper, 8 or 12)\n"
                "  --lr LR        initial learning rate (default 1e-3)\n"
+               "  --minutes M    time budget: no new epoch starts once M minutes of training have\n"
+               "                 passed (the epoch running then finishes; --epochs still caps it)\n"
                "  --samples N    training samples of the embedded data (default 64; 8 more validate);\n"
                "                 with --data: poses per character and epoch (default: all of the dataset's)\n"
                "  --data DATASET a dataset written by gat dataset build: trains on its training characters,\n"
@@ -99,6 +101,7 @@ int gat::cmd_train(int argc, char** argv) {
   long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
   bool samples_set = false;
   float lr = 1e-3f;
+  double minutes = 0;  // 0: no time budget
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
     const char* a = argv[i];
@@ -127,6 +130,14 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--threads") && v) { if (!parse_long(a, argv[++i], 1, 1024, threads)) return 2; }
     else if (!std::strcmp(a, "--batch") && v) { if (!parse_long(a, argv[++i], 1, 4096, batch)) return 2; }
     else if (!std::strcmp(a, "--samples") && v) { if (!parse_long(a, argv[++i], 1, 1000000, samples)) return 2; samples_set = true; }
+    else if (!std::strcmp(a, "--minutes") && v) {
+      char* end = nullptr;
+      minutes = std::strtod(argv[++i], &end);
+      if (*end || !(minutes > 0) || !std::isfinite(minutes)) {
+        std::fprintf(stderr, "gat train: --minutes expects a positive number, got '%s'\n", argv[i]);
+        return 2;
+      }
+    }
     else if (!std::strcmp(a, "--lr") && v) {
       char* end = nullptr;
       lr = std::strtof(argv[++i], &end);
@@ -291,6 +302,12 @@ int gat::cmd_train(int argc, char** argv) {
                 epochs, st.train_loss, st.val_loss, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
                 out.c_str());
     std::fflush(stdout);
+    const double trained_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (minutes > 0 && trained_s >= minutes * 60.0 && trainer.epoch() < epochs) {
+      std::printf("time budget of %g minutes reached after epoch %d (%s); model written to %s\n", minutes, st.epoch,
+                  hms(trained_s).c_str(), out.c_str());
+      return 0;
+    }
     if (g_stop) {
       std::signal(SIGINT, SIG_DFL);
       std::printf("interrupted: stopped after epoch %d; resume with --resume %s\n", st.epoch, out.c_str());

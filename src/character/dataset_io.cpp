@@ -57,6 +57,7 @@ void save_dataset(const std::string& path, const DatasetDescription& d) {
   j["motions"] = relative_to(d.motions, path);
   j["random_poses"] = d.random_poses;
   j["pose_angle"] = d.pose_angle;
+  if (d.joint_limits) j["joint_limits"] = nlohmann::json::parse(joint_limits_json(*d.joint_limits));
   j["motion_stride"] = d.motion_stride;
   j["seed"] = d.seed;
   j["reference_deformer"] = {{"name", "delta_mush"}, {"iterations", d.delta_mush.iterations}, {"step", d.delta_mush.step}};
@@ -64,10 +65,18 @@ void save_dataset(const std::string& path, const DatasetDescription& d) {
   j["validation"] = d.validation;
   j["test"] = d.test;
   j["split"] = {{"train", d.split.train}, {"validation", d.split.validation}, {"test", d.split.test}};
-  std::ofstream f(path);
-  GATCORE_CHECK(f.good(), path, ": cannot write the file");
-  f << j.dump(2) << "\n";
-  GATCORE_CHECK(f.good(), path, ": cannot write the file");
+  // Atomic: a temporary file beside the target, renamed over it.
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
+    f << j.dump(2) << "\n";
+    f.flush();
+    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  GATCORE_CHECK(!ec, path, ": cannot replace the file: ", ec.message());
 }
 
 DatasetDescription load_dataset(const std::string& path) {
@@ -87,6 +96,8 @@ DatasetDescription load_dataset(const std::string& path) {
     d.motions = resolve(j.at("motions").get<std::vector<std::string>>(), path);
     d.random_poses = j.at("random_poses").get<int>();
     d.pose_angle = j.at("pose_angle").get<float>();
+    if (j.contains("joint_limits"))
+      d.joint_limits = parse_joint_limits(j.at("joint_limits").dump(), path + ": field \"joint_limits\"");
     d.motion_stride = j.at("motion_stride").get<int>();
     d.seed = j.at("seed").get<std::uint32_t>();
     const auto& rd = j.at("reference_deformer");
@@ -147,7 +158,8 @@ std::vector<SampleTask> dataset_tasks(const DatasetDescription& d, const std::ve
       t.first = count < n ? static_cast<std::int64_t>(rng() % static_cast<std::uint32_t>(n - count + 1)) : 0;
       tasks.push_back(std::move(t));
     };
-    const auto limits = uniform_limits(pc.character.skeleton, d.pose_angle);
+    const auto limits = d.joint_limits ? d.joint_limits->limits_for(pc.character.skeleton)
+                                       : uniform_limits(pc.character.skeleton, d.pose_angle);
     for (int p = 0; p < d.random_poses; ++p) add(random_pose(pc.character.skeleton, pc.rest, limits, rng), p);
     std::int32_t index = d.random_poses;
     for (const Motion& m : motions) {

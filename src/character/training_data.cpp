@@ -128,4 +128,18 @@ std::vector<models::Sample> training_samples(const TrainingData& data, models::T
   return out;
 }
 
+models::Sample densegats_full_sample(const TrainingData& data, std::int32_t character, const Pose& pose,
+                                     DenseGatsSample* raw) {
+  GATCORE_CHECK(character >= 0 && character < static_cast<std::int32_t>(data.characters.size()),
+                "densegats_full_sample: character ", character, " of ", data.characters.size());
+  DenseGatsSample s = make_densegats_sample(data.characters[std::size_t(character)], pose, 0, 0);
+  models::Sample m;
+  m.name = data.description.characters[std::size_t(character)];
+  m.features = to_super_columns(s.features, data.super.joint_to_bone[std::size_t(character)], data.super.num_bones());
+  m.target = s.target;
+  m.graph = share(std::move(s.graph));
+  if (raw) *raw = std::move(s);
+  return m;
+}
+
 }  // namespace gatcore::character

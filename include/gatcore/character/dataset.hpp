@@ -9,6 +9,7 @@
 // graph. Samples are in normalised coordinates (NormalisationStats).
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <span>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "gatcore/character/character.hpp"
 #include "gatcore/character/deform.hpp"
 #include "gatcore/character/features.hpp"
+#include "gatcore/character/joint_limits.hpp"
 #include "gatcore/character/motion.hpp"
 #include "gatcore/graph.hpp"
 #include "gatcore/tensor.hpp"
@@ -91,7 +93,8 @@ struct DatasetDescription {
   std::vector<std::string> characters;  // file paths, or "procedural:humanoid:SEED" / "procedural:creature:SEED"
   std::vector<std::string> motions;     // BVH files, retargeted onto every character (CMU joint names)
   int random_poses = 32;                // per character per epoch
-  float pose_angle = 0.5f;              // uniform_limits(+-pose_angle) around the bind pose
+  float pose_angle = 0.5f;              // uniform_limits(+-pose_angle) around the bind pose, unless:
+  std::optional<JointLimitTable> joint_limits;  // per-joint limits for the random poses (recorded in full)
   int motion_stride = 4;                // every k-th motion frame
   std::uint32_t seed = 0;
   DeltaMushParams delta_mush;           // the reference deformer's parameters

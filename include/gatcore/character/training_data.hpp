@@ -53,6 +53,14 @@ std::string file_hash(const std::string& path);
 std::vector<models::Sample> training_samples(const TrainingData& data, models::Task task, DatasetPart part,
                                              int epoch = 0, int geodesic_k = 64, int max_poses_per_character = 0);
 
+// The displacement-task sample of one character (index into data.characters)
+// in one pose over its whole mesh, for evaluation and inference: features in
+// the super skeleton's columns, Delta Mush - LBS target, the mesh graph.
+// `raw` (optional) receives the pipeline's sample (LBS positions, target, in
+// normalised units: world = normalised / norm.scale + norm.origin).
+models::Sample densegats_full_sample(const TrainingData& data, std::int32_t character, const Pose& pose,
+                                     DenseGatsSample* raw = nullptr);
+
 // Comma-separated super-skeleton bone names (checkpoint metadata).
 std::string joined_bone_names(const SuperSkeleton& s);
 

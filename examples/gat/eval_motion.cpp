@@ -1,0 +1,397 @@
+// See eval_motion.hpp.
+#include "eval_motion.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gatcore/character/deform.hpp"
+#include "gatcore/character/render.hpp"
+#include "gatcore/character/training_data.hpp"
+#include "gatcore/error.hpp"
+#include "gatcore/models/checkpoint.hpp"
+
+using namespace gatcore;
+using namespace gatcore::character;
+using namespace gatcore::models;
+namespace fs = std::filesystem;
+
+namespace {
+
+int usage(int rc) {
+  std::fprintf(rc ? stderr : stdout,
+               "usage: gat eval --motion M.bvh [--motion ...] --data DATASET [--model [LABEL=]FILE ...]\n"
+               "                [--part test|validation|train] [--stride K] [--json OUT] [--markdown OUT]\n"
+               "                [--errormaps DIR] [--errormap-frames N] [--errormap-size PX]\n"
+               "                [--loss-curve LABEL=TRAIN_LOG ...] [--cm-per-unit X]\n"
+               "  Evaluates displacement models (LBS + predicted offsets) and the LBS and DQS baselines\n"
+               "  against the dataset's reference deformer (Delta Mush on LBS) on every K-th frame\n"
+               "  (default 1: all frames) of each motion retargeted onto each character of the part:\n"
+               "  per-vertex distance mean / max / min per character and motion, per character, overall.\n"
+               "  --cm-per-unit X  centimetres per world unit (default: 100 for glTF files, whose unit is the\n"
+               "                   metre; unknown for other sources unless given)\n"
+               "  --errormaps DIR  per-vertex error colour maps (PNG) of N frames (default 2) of the first\n"
+               "                   motion per character and method, one colour scale per frame: blue 0, red\n"
+               "                   the 99th percentile of LBS's error in that frame (in the JSON) and above\n"
+               "  --loss-curve LABEL=LOG  plots the train / validation loss per epoch of a `gat train` log\n"
+               "                   (its 'epoch N/M  train loss X  val loss Y' lines) to DIR/loss_LABEL.png\n");
+  return rc;
+}
+
+struct Acc {
+  double sum = 0, max = 0, min = std::numeric_limits<double>::infinity();
+  std::int64_t count = 0;
+  void add(double e) {
+    sum += e, ++count;
+    max = std::max(max, e), min = std::min(min, e);
+  }
+  void add(const Acc& o) {
+    sum += o.sum, count += o.count;
+    max = std::max(max, o.max), min = std::min(min, o.min);
+  }
+  double mean() const { return count ? sum / double(count) : 0.0; }
+};
+
+void write_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
+    f << text;
+    f.flush();
+    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  GATCORE_CHECK(!ec, path, ": cannot replace the file: ", ec.message());
+}
+
+std::string stem(const std::string& p) { return fs::path(p).stem().string(); }
+
+// "Casual.glb" of "modular_men": "men/Casual".
+std::string character_label(const std::string& entry) {
+  const fs::path p(entry);
+  std::string dir = p.parent_path().filename().string();
+  if (dir.rfind("modular_", 0) == 0) dir = dir.substr(8);
+  return dir.empty() ? p.stem().string() : dir + "/" + p.stem().string();
+}
+
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4f", v);
+  return b;
+}
+
+// The per-epoch losses of a `gat train` log.
+std::vector<std::vector<float>> read_losses(const std::string& path) {
+  std::ifstream f(path);
+  GATCORE_CHECK(f.good(), path, ": cannot open the training log");
+  std::vector<std::vector<float>> s(2);
+  std::string line;
+  while (std::getline(f, line)) {
+    int e = 0, n = 0;
+    float tr = 0, va = 0;
+    if (std::sscanf(line.c_str(), "epoch %d/%d train loss %f val loss %f", &e, &n, &tr, &va) == 4) {
+      s[0].push_back(tr);
+      s[1].push_back(va);
+    }
+  }
+  GATCORE_CHECK(!s[0].empty(), path, ": no 'epoch N/M  train loss X  val loss Y' lines");
+  return s;
+}
+
+}  // namespace
+
+int gat::eval_motion(int argc, char** argv) {
+  std::string data, part = "test", json_out, md_out, map_dir;
+  std::vector<std::string> motion_paths, loss_curves;
+  std::vector<std::pair<std::string, std::string>> model_args;  // label, file
+  long stride = 1, map_frames = 2, map_size = 320;
+  double cm_per_unit = -1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") return usage(0);
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "gat eval: unknown or incomplete option '%s'\n", a.c_str());
+      return usage(2);
+    }
+    const std::string v = argv[++i];
+    auto integer = [&](long lo, long hi) {
+      char* end = nullptr;
+      const long x = std::strtol(v.c_str(), &end, 10);
+      if (v.empty() || *end || x < lo || x > hi)
+        throw InvalidArgument(detail::cat("gat eval: ", a, " expects an integer in [", lo, ", ", hi, "], got '", v, "'"));
+      return x;
+    };
+    if (a == "--motion") motion_paths.push_back(v);
+    else if (a == "--data") data = v;
+    else if (a == "--part") part = v;
+    else if (a == "--model") {
+      const auto eq = v.find('=');
+      model_args.emplace_back(eq == std::string::npos ? std::string() : v.substr(0, eq),
+                              eq == std::string::npos ? v : v.substr(eq + 1));
+    } else if (a == "--stride") stride = integer(1, 1000000);
+    else if (a == "--json") json_out = v;
+    else if (a == "--markdown") md_out = v;
+    else if (a == "--errormaps") map_dir = v;
+    else if (a == "--errormap-frames") map_frames = integer(0, 1000);
+    else if (a == "--errormap-size") map_size = integer(32, 4096);
+    else if (a == "--loss-curve") loss_curves.push_back(v);
+    else if (a == "--cm-per-unit") {
+      char* end = nullptr;
+      cm_per_unit = std::strtod(v.c_str(), &end);
+      if (*end || !(cm_per_unit > 0) || !std::isfinite(cm_per_unit))
+        throw InvalidArgument("gat eval: --cm-per-unit expects a positive number, got '" + v + "'");
+    } else {
+      std::fprintf(stderr, "gat eval: unknown option '%s'\n", a.c_str());
+      return usage(2);
+    }
+  }
+  if (data.empty() || motion_paths.empty()) {
+    std::fprintf(stderr, "gat eval: --motion needs --data DATASET\n");
+    return usage(2);
+  }
+  if (part != "test" && part != "validation" && part != "train") {
+    std::fprintf(stderr, "gat eval: --part expects test, validation or train, got '%s'\n", part.c_str());
+    return 2;
+  }
+  if (!loss_curves.empty() && map_dir.empty()) {
+    std::fprintf(stderr, "gat eval: --loss-curve writes into the --errormaps DIR; give one\n");
+    return 2;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const TrainingData td = load_training_data(data);
+  const std::string bones = joined_bone_names(td.super);
+  struct M {
+    std::string label, file;
+    LoadedModel l;
+  };
+  std::vector<M> models_;
+  for (auto& [label, file] : model_args) {
+    M m{label, file, load_checkpoint(file)};
+    const ModelConfig& cfg = m.l.model->config();
+    GATCORE_CHECK(cfg.task == Task::displacement, "gat eval: ", file, ": model '", cfg.name,
+                  "' predicts skin weights; --motion evaluates displacement models");
+    GATCORE_CHECK(cfg.in_dim == td.feature_dim(), "gat eval: ", file, " takes ", cfg.in_dim, " features; ", data,
+                  " has ", td.feature_dim());
+    const auto& md = m.l.file.metadata;
+    if (md.count("skeleton") && md.at("skeleton") != bones)
+      throw InvalidArgument(detail::cat("gat eval: ", file, ": trained on a super skeleton (", md.at("skeleton"),
+                                        ") that differs from ", data, "'s (", bones, ")"));
+    if (m.label.empty()) m.label = cfg.name;
+    m.l.model->fold_batch_norm();
+    models_.push_back(std::move(m));
+  }
+  std::vector<Motion> motions;
+  for (const auto& p : motion_paths) motions.push_back(load_bvh(p));
+  const auto dpart = part == "test" ? DatasetPart::test : part == "validation" ? DatasetPart::validation : DatasetPart::train;
+  const auto& chars = td.part(dpart);
+  GATCORE_CHECK(!chars.empty(), "gat eval: ", data, " has no ", part, " characters");
+
+  std::vector<std::string> methods = {"LBS", "DQS"};
+  for (const auto& m : models_) methods.push_back(m.label);
+  const std::size_t K = methods.size();
+  if (!map_dir.empty()) fs::create_directories(map_dir);
+
+  nlohmann::json rows = nlohmann::json::array(), maps = nlohmann::json::array();
+  std::vector<Acc> overall(K), overall_cm(K);
+  bool all_cm = true;
+  struct Row {
+    std::string character, motion;
+    std::int64_t frames = 0, vertices = 0;
+    double cm = 0;
+    std::vector<Acc> acc;
+  };
+  std::vector<Row> table, per_char;
+  for (std::int32_t c : chars) {
+    const PreparedCharacter& pc = td.characters[std::size_t(c)];
+    const std::string& entry = td.description.characters[std::size_t(c)];
+    std::string ext = fs::path(entry).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char x) { return char(std::tolower(x)); });
+    const double cm = cm_per_unit > 0 ? cm_per_unit : (ext == ".glb" || ext == ".gltf") ? 100.0 : 0.0;
+    all_cm = all_cm && cm > 0;
+    const double to_world = 1.0 / double(pc.norm.scale);
+    const std::int64_t n = pc.character.mesh.num_vertices();
+    Row chrow{character_label(entry), "all", 0, n, cm, std::vector<Acc>(K)};
+    for (std::size_t mi = 0; mi < motions.size(); ++mi) {
+      const Clip clip = retarget(motions[mi], pc.character.skeleton, mat4_identity());
+      Row row{character_label(entry), motions[mi].name, 0, n, cm, std::vector<Acc>(K)};
+      std::vector<std::size_t> frames;
+      for (std::size_t f = 0; f < clip.frames.size(); f += std::size_t(stride)) frames.push_back(f);
+      std::vector<std::size_t> map_at;
+      if (!map_dir.empty() && mi == 0)
+        for (long k = 0; k < map_frames && !frames.empty(); ++k)
+          map_at.push_back(frames[std::size_t((2 * k + 1) * frames.size() / std::size_t(2 * map_frames))]);
+      const auto tc = std::chrono::steady_clock::now();
+      for (std::size_t f : frames) {
+        const Pose& pose = clip.frames[f];
+        DenseGatsSample raw;
+        const Sample s = densegats_full_sample(td, c, pose, &raw);
+        // Reference (Delta Mush) and DQS in normalised units.
+        const std::vector<Mat4> g = global_transforms(pc.character.skeleton, pose);
+        std::vector<Mat4> S(g.size());
+        for (std::size_t j = 0; j < g.size(); ++j) S[j] = mul(g[j], pc.character.skeleton.inverse_bind[j]);
+        const std::vector<float> dqs = apply_normalisation(pc.norm, dual_quaternion_skinning(pc.character.mesh, S));
+        std::vector<std::vector<float>> err(K, std::vector<float>(std::size_t(n)));
+        std::vector<Tensor> preds;
+        for (auto& m : models_) preds.push_back(predict(*m.l.model, s, m.l.norm));
+        for (std::int64_t v = 0; v < n; ++v) {
+          double e[2] = {0, 0};
+          for (int a = 0; a < 3; ++a) {
+            const double ref = double(raw.lbs.at(v, a)) + raw.target.at(v, a);
+            e[0] += double(raw.target.at(v, a)) * raw.target.at(v, a);
+            e[1] += (dqs[std::size_t(3 * v + a)] - ref) * (dqs[std::size_t(3 * v + a)] - ref);
+          }
+          err[0][std::size_t(v)] = float(std::sqrt(e[0]) * to_world);
+          err[1][std::size_t(v)] = float(std::sqrt(e[1]) * to_world);
+          for (std::size_t k = 0; k < preds.size(); ++k) {
+            double d = 0;
+            for (int a = 0; a < 3; ++a) {
+              const double x = double(preds[k].at(v, a)) - raw.target.at(v, a);
+              d += x * x;
+            }
+            err[2 + k][std::size_t(v)] = float(std::sqrt(d) * to_world);
+          }
+        }
+        for (std::size_t k = 0; k < K; ++k)
+          for (float e : err[k]) row.acc[k].add(e);
+        ++row.frames;
+        if (std::find(map_at.begin(), map_at.end(), f) != map_at.end()) {
+          std::vector<float> world(std::size_t(3 * n));
+          for (std::int64_t v = 0; v < n; ++v)
+            for (int a = 0; a < 3; ++a)
+              world[std::size_t(3 * v + a)] = float((raw.lbs.at(v, a) + raw.target.at(v, a)) * to_world);
+          RenderOptions ro;
+          ro.width = ro.height = int(map_size);
+          // One colour scale for every method of this frame: the 99th
+          // percentile of LBS's error (a few reference outliers would
+          // otherwise turn everything blue); larger errors are clamped (red).
+          std::vector<float> sorted = err[0];
+          const std::size_t q = std::min(sorted.size() - 1, std::size_t(0.99 * double(sorted.size())));
+          std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(q), sorted.end());
+          ro.max_error = std::max(sorted[q], 1e-12f);
+          for (std::size_t k = 0; k < K; ++k) {
+            std::string name = row.character + "_" + stem(motions[mi].name) + "_f" + std::to_string(f) + "_" + methods[k];
+            std::replace(name.begin(), name.end(), '/', '_');
+            write_png((fs::path(map_dir) / (name + ".png")).string(),
+                      render_error_map(world, pc.character.mesh.triangles, err[k], ro));
+            maps.push_back({{"file", name + ".png"}, {"character", row.character}, {"motion", motions[mi].name},
+                            {"frame", f}, {"method", methods[k]}, {"colour_scale_top", ro.max_error},
+                            {"colour_scale_top_cm", cm > 0 ? ro.max_error * cm : 0.0}});
+          }
+        }
+      }
+      std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%.1f s):", row.character.c_str(),
+                  stem(row.motion).c_str(), static_cast<long long>(row.frames), static_cast<long long>(n),
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
+      for (std::size_t k = 0; k < K; ++k) std::printf("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
+      std::printf("\n");
+      std::fflush(stdout);
+      for (std::size_t k = 0; k < K; ++k) chrow.acc[k].add(row.acc[k]);
+      chrow.frames += row.frames;
+      table.push_back(row);
+    }
+    for (std::size_t k = 0; k < K; ++k) {
+      overall[k].add(chrow.acc[k]);
+      Acc a = chrow.acc[k];
+      if (cm > 0) a.sum *= cm, a.max *= cm, a.min *= cm;
+      overall_cm[k].add(a);
+    }
+    per_char.push_back(chrow);
+  }
+  for (const auto& lc : loss_curves) {
+    const auto eq = lc.find('=');
+    GATCORE_CHECK(eq != std::string::npos && eq > 0, "gat eval: --loss-curve expects LABEL=LOG, got '", lc, "'");
+    const auto series = read_losses(lc.substr(eq + 1));
+    const std::string png = (fs::path(map_dir) / ("loss_" + lc.substr(0, eq) + ".png")).string();
+    write_png(png, plot_curves(series, 480, 300, true));
+    std::printf("  loss curve of %s (%zu epochs) -> %s\n", lc.substr(0, eq).c_str(), series[0].size(), png.c_str());
+  }
+
+  // Report.
+  auto stats_json = [&](const Acc& a, double cm) {
+    nlohmann::json j = {{"mean", a.mean()}, {"max", a.max}, {"min", a.min}, {"vertex_frames", a.count}};
+    if (cm > 0) j["mean_cm"] = a.mean() * cm, j["max_cm"] = a.max * cm, j["min_cm"] = a.min * cm;
+    return j;
+  };
+  nlohmann::json j;
+  j["format"] = "gatcore-eval-motion";
+  j["version"] = 1;
+  j["dataset"] = fs::absolute(data).lexically_normal().string();
+  j["dataset_hash"] = td.hash;
+  j["part"] = part;
+  j["stride"] = stride;
+  j["reference"] = {{"name", "delta_mush"}, {"iterations", td.description.delta_mush.iterations},
+                    {"step", td.description.delta_mush.step}};
+  j["motions"] = motion_paths;
+  j["methods"] = methods;
+  for (const auto& m : models_) {
+    const auto& md = m.l.file.metadata;
+    nlohmann::json mj = {{"file", m.file}, {"model", m.l.model->config().name},
+                         {"parameters", m.l.model->registry().num_parameters()}};
+    for (const char* key : {"epoch", "seed", "samples", "batch"})
+      if (md.count(key)) mj[key] = md.at(key);
+    j["models"][m.label] = mj;
+  }
+  for (const auto& group : {&table, &per_char})
+    for (const Row& r : *group) {
+      nlohmann::json rj = {{"character", r.character}, {"motion", r.motion}, {"frames", r.frames},
+                           {"vertices", r.vertices}, {"cm_per_unit", r.cm}};
+      for (std::size_t k = 0; k < K; ++k) rj["methods"][methods[k]] = stats_json(r.acc[k], r.cm);
+      rows.push_back(rj);
+    }
+  j["rows"] = rows;
+  j["errormaps"] = maps;
+  for (std::size_t k = 0; k < K; ++k) {
+    j["overall"][methods[k]] = stats_json(overall[k], 0);
+    if (all_cm) {
+      j["overall"][methods[k]]["mean_cm"] = overall_cm[k].mean();
+      j["overall"][methods[k]]["max_cm"] = overall_cm[k].max;
+      j["overall"][methods[k]]["min_cm"] = overall_cm[k].min;
+    }
+  }
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  j["seconds"] = secs;
+
+  std::ostringstream md;
+  const char* u = all_cm ? "cm" : "units";
+  md << "Overall (" << per_char.size() << " " << part << " characters, every " << stride
+     << (stride == 1 ? "" : "th") << " frame of " << motions.size() << " motion(s); per-vertex distance to Delta Mush, "
+     << u << "):\n\n| method | mean | max | min |\n|---|---:|---:|---:|\n";
+  for (std::size_t k = 0; k < K; ++k) {
+    const Acc& a = all_cm ? overall_cm[k] : overall[k];
+    md << "| " << methods[k] << " | " << fmt(a.mean()) << " | " << fmt(a.max) << " | " << fmt(a.min) << " |\n";
+  }
+  md << "\nPer character and motion (mean / max / min, " << u << "):\n\n| character | motion | frames | vertices |";
+  for (const auto& m : methods) md << " " << m << " |";
+  md << "\n|---|---|---:|---:|";
+  for (std::size_t k = 0; k < K; ++k) md << "---:|";
+  md << "\n";
+  for (const auto& group : {&table, &per_char})
+    for (const Row& r : *group) {
+      md << "| " << r.character << " | " << (r.motion == "all" ? "all" : stem(r.motion)) << " | " << r.frames << " | "
+         << r.vertices << " |";
+      const double s = all_cm ? r.cm : 1.0;
+      for (std::size_t k = 0; k < K; ++k)
+        md << " " << fmt(r.acc[k].mean() * s) << " / " << fmt(r.acc[k].max * s) << " / " << fmt(r.acc[k].min * s)
+           << " |";
+      md << "\n";
+    }
+  if (!json_out.empty()) write_atomic(json_out, j.dump(2) + "\n");
+  if (!md_out.empty()) write_atomic(md_out, md.str());
+  std::printf("%s", md.str().c_str());
+  std::printf("gat eval: %zu methods on %zu characters in %.1f s\n", K, per_char.size(), secs);
+  return 0;
+}
