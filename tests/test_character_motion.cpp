@@ -107,6 +107,66 @@ TEST_CASE("retargeting a motion onto its own skeleton reproduces it, grounded", 
   CHECK_THROWS_WITH(retarget(m, m.skeleton, mat4_identity(), none), Contains("no joint of the motion maps"));
 }
 
+TEST_CASE("retargeting moves legs that hang off a root above the hips along with the hips", "[character][retarget]") {
+  // Quaternius rigs: Root -> Hips -> Spine and Root -> LeftUpLeg -> LeftLeg.
+  // The root motion must carry the legs too, not stretch the pelvis.
+  const char* target_bvh = R"(HIERARCHY
+ROOT Root
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation
+  JOINT Hips
+  {
+    OFFSET 0 0 0
+    CHANNELS 3 Zrotation Yrotation Xrotation
+    JOINT Spine
+    {
+      OFFSET 0 2 0
+      CHANNELS 3 Zrotation Yrotation Xrotation
+      End Site
+      {
+        OFFSET 0 3 0
+      }
+    }
+  }
+  JOINT LeftUpLeg
+  {
+    OFFSET 1 -1 0
+    CHANNELS 3 Zrotation Yrotation Xrotation
+    JOINT LeftLeg
+    {
+      OFFSET 0 -4 0
+      CHANNELS 3 Zrotation Yrotation Xrotation
+      End Site
+      {
+        OFFSET 0 -4 0
+      }
+    }
+  }
+}
+MOTION
+Frames: 1
+Frame Time: 0.0333333
+0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0
+)";
+  const Motion m = load_bvh(charfix::write_temp("self.bvh", kBvh));
+  const Motion t = load_bvh(charfix::write_temp("rooted.bvh", target_bvh));
+  RetargetMap map;
+  for (const auto& n : m.skeleton.names) map.pairs.push_back({n, n});
+  const Clip c = retarget(m, t.skeleton, mat4_identity(), map);
+  REQUIRE(c.frames.size() == m.clip.frames.size());
+  const std::int32_t sh = m.skeleton.find("Hips"), th = t.skeleton.find("Hips");
+  for (std::size_t f = 0; f < c.frames.size(); ++f) {
+    const auto a = global_transforms(m.skeleton, m.clip.frames[f]), b = global_transforms(t.skeleton, c.frames[f]);
+    CHECK(pos(b, th)[2] == Approx(static_cast<float>(f)).margin(1e-5));  // the walk moves 1 per frame
+    for (const char* name : {"LeftUpLeg", "LeftLeg", "Spine"}) {
+      const std::int32_t sj = m.skeleton.find(name), tj = t.skeleton.find(name);
+      for (int k = 0; k < 3; ++k)
+        CHECK(pos(b, tj)[k] - pos(b, th)[k] == Approx(pos(a, sj)[k] - pos(a, sh)[k]).margin(1e-4));
+    }
+  }
+}
+
 TEST_CASE("random poses: deterministic per seed, within limits, roots at rest", "[character][pose]") {
   const Character ch = charfix::tube_character();
   const Pose rest = rest_pose(ch.skeleton);

@@ -49,6 +49,7 @@ Quat rotation_between(Vec3 a, Vec3 b) {
 }
 
 Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
 
 }  // namespace
 
@@ -118,6 +119,13 @@ Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_
   }
   const Vec3 s_start = sg_all.empty() ? Vec3{0.0f, 0.0f, 0.0f} : mat4_translation(sg_all[0][hips_s]);
 
+  // The root motion moves the whole skeleton: it goes on the topmost
+  // ancestor of the hips. Rigs whose legs hang off a root above the hips
+  // (Quaternius: Root -> Hips, Root -> UpperLeg.L) would otherwise leave the
+  // legs behind while the body walks away.
+  std::int32_t mover = hips_t;
+  while (target.parents[mover] >= 0) mover = target.parents[mover];
+
   Clip out;
   out.name = motion.clip.name;
   out.fps = motion.clip.fps;
@@ -125,11 +133,21 @@ Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_
   std::vector<Mat4> tg(static_cast<std::size_t>(J));
   for (const std::vector<Mat4>& sg : sg_all) {
     Pose p = t_rest;
+    // Where the hips go this frame, and how far that is from their rest place.
+    const Vec3 h = mat4_translation(sg[hips_s]);
+    const Vec3 hips_rest = mat4_translation(tg0[hips_t]);
+    const Vec3 hips_at = {hips_rest[0] + scale * (h[0] - s_start[0]), t_ground + scale * (h[1] - s_ground),
+                          hips_rest[2] + scale * (h[2] - s_start[2])};
+    const Vec3 shift = sub(hips_at, hips_rest);
     for (std::int32_t t = 0; t < J; ++t) {
       const Mat4 parent = target.parents[t] >= 0 ? tg[target.parents[t]] : target.root_parent[t];
       const std::int32_t s = source_of[t];
       if (s < 0) {
         tg[t] = mul(parent, to_matrix(t_rest.local[t]));
+        if (t == mover) {
+          for (int c = 0; c < 3; ++c) tg[t][12 + c] += shift[c];
+          p.local[t] = to_transform(mul(inverse(parent), tg[t]));
+        }
         continue;
       }
       const Transform rest_world = to_transform(tg0[t]);
@@ -137,13 +155,8 @@ Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_
       Transform w;
       w.rotation = quat_normalize(quat_mul(d, quat_mul(align[t], rest_world.rotation)));
       w.scale = rest_world.scale;
-      if (t == hips_t) {
-        const Vec3 h = mat4_translation(sg[s]);
-        w.translation = {rest_world.translation[0] + scale * (h[0] - s_start[0]), t_ground + scale * (h[1] - s_ground),
-                         rest_world.translation[2] + scale * (h[2] - s_start[2])};
-      } else {
-        w.translation = transform_point(parent, t_rest.local[t].translation);
-      }
+      w.translation = transform_point(parent, t_rest.local[t].translation);
+      if (t == mover) w.translation = add(w.translation, shift);
       tg[t] = to_matrix(w);
       p.local[t] = to_transform(mul(inverse(parent), tg[t]));
     }
