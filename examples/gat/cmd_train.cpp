@@ -42,7 +42,7 @@ int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
                "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
-               "                 [--device cpu|vulkan|auto]\n"
+               "                 [--device cpu|vulkan|auto] [--minutes M] [--val-every K]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
@@ -64,6 +64,9 @@ int usage(int rc) {
                "  --device D     cpu (default), vulkan (the device GATCORE_VK_DEVICE selects, else the\n"
                "                 first GPU; lavapipe needs GATCORE_VK_ALLOW_CPU=1) or auto (Vulkan when a\n"
                "                 GPU is there, else the CPU); checkpoints are the same on every device\n"
+               "  --minutes M    wall-time budget: stop after the first epoch that ends M minutes or more\n"
+               "                 after training started (default: none; --epochs still caps the run)\n"
+               "  --val-every K  validate every K-th epoch and after the last one (default 1)\n"
                "  Without --data the embedded tube character is used: displacement models learn the\n"
                "  correction of LBS in random bend/twist poses; skin-weight models learn the\n"
                "  two-bone weights of tubes of varying resolution.\n");
@@ -95,6 +98,8 @@ int gat::cmd_train(int argc, char** argv) {
   long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
   bool samples_set = false;
   float lr = 1e-3f;
+  double minutes = 0;
+  long val_every = 1;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
     const char* a = argv[i];
@@ -122,6 +127,15 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--threads") && v) { if (!parse_long(a, argv[++i], 1, 1024, threads)) return 2; }
     else if (!std::strcmp(a, "--batch") && v) { if (!parse_long(a, argv[++i], 1, 4096, batch)) return 2; }
     else if (!std::strcmp(a, "--samples") && v) { if (!parse_long(a, argv[++i], 1, 1000000, samples)) return 2; samples_set = true; }
+    else if (!std::strcmp(a, "--val-every") && v) { if (!parse_long(a, argv[++i], 1, 1000000, val_every)) return 2; }
+    else if (!std::strcmp(a, "--minutes") && v) {
+      char* end = nullptr;
+      minutes = std::strtod(argv[++i], &end);
+      if (*end || !(minutes > 0) || !std::isfinite(minutes)) {
+        std::fprintf(stderr, "gat train: --minutes expects a positive number, got '%s'\n", argv[i]);
+        return 2;
+      }
+    }
     else if (!std::strcmp(a, "--lr") && v) {
       char* end = nullptr;
       lr = std::strtof(argv[++i], &end);
@@ -230,6 +244,14 @@ int gat::cmd_train(int argc, char** argv) {
     extra["data_path"] = std::filesystem::absolute(data).string();
     extra["data_hash"] = td->hash;
     extra["skeleton"] = character::joined_bone_names(td->super);
+    // What a new character's input needs (gat predict-weights): the feature
+    // layout; the columns follow "skeleton" (bone names normalised by
+    // character::normalise_bone_name), the statistics are norm.mean / norm.inv_std.
+    extra["features"] = cfg.task == Task::weights
+                            ? "neuroskinning: rest position (3), rest normal (3), distance to each skeleton bone "
+                              "segment; world frame, hips at the origin, height 1 (character::compute_normalisation)"
+                            : "densegats: posed position (3), posed normal (3), distance to each skeleton joint; "
+                              "normalised like neuroskinning";
   } else {
     extra["data"] = "embedded tube character";
     extra["skeleton"] = "upper_arm,forearm";
@@ -261,13 +283,24 @@ int gat::cmd_train(int argc, char** argv) {
                    hms(eta).c_str());
       std::fflush(stderr);
     };
-    const EpochStats st = trainer.run_epoch(train, val, progress);
+    const bool last = trainer.epoch() + 1 >= epochs;
+    const bool validate = last || (trainer.epoch() + 1) % val_every == 0;
+    const EpochStats st = trainer.run_epoch(train, validate ? val : std::vector<Sample>{}, progress);
     save_checkpoint(out, *model, norm, &trainer, extra);
     if (tty) std::fprintf(stderr, "\r\033[K");
-    std::printf("epoch %d/%ld  train loss %.6f  val loss %.6f  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
-                epochs, st.train_loss, st.val_loss, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
+    char val_text[32] = "-";
+    if (st.val_loss >= 0) std::snprintf(val_text, sizeof val_text, "%.6f", st.val_loss);
+    std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
+                epochs, st.train_loss, val_text, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
                 out.c_str());
     std::fflush(stdout);
+    if (minutes > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= minutes * 60.0 &&
+        trainer.epoch() < epochs) {
+      std::printf("time budget of %g minutes reached after epoch %d (%s); model written to %s\n", minutes,
+                  trainer.epoch(), hms(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()).c_str(),
+                  out.c_str());
+      return 0;
+    }
     if (g_stop) {
       std::signal(SIGINT, SIG_DFL);
       std::printf("interrupted: stopped after epoch %d; resume with --resume %s\n", st.epoch, out.c_str());
