@@ -42,7 +42,7 @@ int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
                "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
-               "                 [--device cpu|vulkan|auto] [--minutes M] [--val-every K]\n"
+               "                 [--device cpu|vulkan|auto] [--minutes M] [--val-every K] [--sample-vertices V]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
@@ -67,6 +67,7 @@ int usage(int rc) {
                "  --minutes M    wall-time budget: stop after the first epoch that ends M minutes or more\n"
                "                 after training started (default: none; --epochs still caps the run)\n"
                "  --val-every K  validate every K-th epoch and after the last one (default 1)\n"
+               "  --sample-vertices V  vertices per training sample (default: paper, 1000 or 2048)\n"
                "  Without --data the embedded tube character is used: displacement models learn the\n"
                "  correction of LBS in random bend/twist poses; skin-weight models learn the\n"
                "  two-bone weights of tubes of varying resolution.\n");
@@ -99,7 +100,7 @@ int gat::cmd_train(int argc, char** argv) {
   bool samples_set = false;
   float lr = 1e-3f;
   double minutes = 0;
-  long val_every = 1;
+  long val_every = 1, sample_vertices = 0;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
     const char* a = argv[i];
@@ -127,6 +128,7 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--threads") && v) { if (!parse_long(a, argv[++i], 1, 1024, threads)) return 2; }
     else if (!std::strcmp(a, "--batch") && v) { if (!parse_long(a, argv[++i], 1, 4096, batch)) return 2; }
     else if (!std::strcmp(a, "--samples") && v) { if (!parse_long(a, argv[++i], 1, 1000000, samples)) return 2; samples_set = true; }
+    else if (!std::strcmp(a, "--sample-vertices") && v) { if (!parse_long(a, argv[++i], 1, 100000000, sample_vertices)) return 2; }
     else if (!std::strcmp(a, "--val-every") && v) { if (!parse_long(a, argv[++i], 1, 1000000, val_every)) return 2; }
     else if (!std::strcmp(a, "--minutes") && v) {
       char* end = nullptr;
@@ -165,6 +167,7 @@ int gat::cmd_train(int argc, char** argv) {
       seed = std::stol(md.at("seed"));
       samples = std::stol(md.at("samples"));
       batch = std::stol(md.at("batch"));
+      if (md.count("sample_vertices")) sample_vertices = std::stol(md.at("sample_vertices"));
     }
     if (md.count("data_path")) {
       if (data.empty()) data = md.at("data_path");
@@ -223,6 +226,7 @@ int gat::cmd_train(int argc, char** argv) {
   opt.seed = std::uint64_t(seed);
   opt.lr = lr;
   if (batch > 0) opt.batch_size = int(batch);
+  if (sample_vertices > 0) opt.sample_vertices = sample_vertices;
   // Parameters are drawn (or loaded) on the CPU and moved before the
   // optimiser allocates its moments next to them.
   model->to(dev);
@@ -238,7 +242,8 @@ int gat::cmd_train(int argc, char** argv) {
               dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu");
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
                                            {"samples", std::to_string(samples)},
-                                           {"batch", std::to_string(opt.batch_size)}};
+                                           {"batch", std::to_string(opt.batch_size)},
+                                           {"sample_vertices", std::to_string(opt.sample_vertices)}};
   if (td) {
     extra["data"] = "dataset";
     extra["data_path"] = std::filesystem::absolute(data).string();

@@ -84,28 +84,42 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
     r.vertex_l1[static_cast<std::size_t>(v)] = static_cast<float>(l1);
   }
   if (opts.poses > 0) {
-    Mesh pred = mesh, gt = mesh;
-    pred.weights = weights_from_super(predicted, num_bones, joint_to_bone);
-    gt.weights = weights_from_super(truth, num_bones, joint_to_bone);
     const Skeleton& sk = pc.character.skeleton;
     const auto limits = uniform_limits(sk, opts.pose_angle);
     std::mt19937 rng(opts.seed ^ (0x9e3779b9u * static_cast<std::uint32_t>(character_index + 1)));
-    std::vector<std::vector<float>> distances(static_cast<std::size_t>(opts.poses));
-    for (int p = 0; p < opts.poses; ++p) {
-      const Pose pose = random_pose(sk, pc.rest, limits, rng);
-      const std::vector<Mat4> m = skinning_matrices(sk, pose);
-      const std::vector<float> a = linear_blend_skinning(pred, m), b = linear_blend_skinning(gt, m);
-      auto& d = distances[static_cast<std::size_t>(p)];
-      d.resize(static_cast<std::size_t>(n));
-      for (std::int64_t v = 0; v < n; ++v) {
-        const std::size_t i = static_cast<std::size_t>(3 * v);
-        const double dx = a[i] - b[i], dy = a[i + 1] - b[i + 1], dz = a[i + 2] - b[i + 2];
-        d[static_cast<std::size_t>(v)] = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
-      }
-    }
-    r.deformation = worst_poses_error(distances, r.height, opts.worst);
+    std::vector<Pose> poses;
+    for (int p = 0; p < opts.poses; ++p) poses.push_back(random_pose(sk, pc.rest, limits, rng));
+    r.deformation = deformation_error(pc, weights_from_super(predicted, num_bones, joint_to_bone),
+                                      weights_from_super(truth, num_bones, joint_to_bone), poses, opts.worst);
   }
   return r;
+}
+
+DistanceStats deformation_error(const PreparedCharacter& pc, const SkinWeights& predicted, const SkinWeights& truth,
+                                std::span<const Pose> poses, int worst) {
+  const std::int64_t n = pc.character.mesh.num_vertices();
+  GATCORE_CHECK(predicted.num_vertices() == n && truth.num_vertices() == n, "deformation_error: ",
+                predicted.num_vertices(), " predicted and ", truth.num_vertices(), " true weight rows for ", n,
+                " vertices");
+  GATCORE_CHECK(pc.norm.scale > 0.0f && std::isfinite(pc.norm.scale), "deformation_error: character scale ",
+                pc.norm.scale);
+  Mesh pred = pc.character.mesh, gt = pc.character.mesh;
+  pred.weights = predicted;
+  gt.weights = truth;
+  const Skeleton& sk = pc.character.skeleton;
+  std::vector<std::vector<float>> distances(poses.size());
+  for (std::size_t p = 0; p < poses.size(); ++p) {
+    const std::vector<Mat4> m = skinning_matrices(sk, poses[p]);
+    const std::vector<float> a = linear_blend_skinning(pred, m), b = linear_blend_skinning(gt, m);
+    auto& d = distances[p];
+    d.resize(static_cast<std::size_t>(n));
+    for (std::int64_t v = 0; v < n; ++v) {
+      const std::size_t i = static_cast<std::size_t>(3 * v);
+      const double dx = a[i] - b[i], dy = a[i + 1] - b[i + 1], dz = a[i + 2] - b[i + 2];
+      d[static_cast<std::size_t>(v)] = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+  }
+  return worst_poses_error(distances, 1.0 / static_cast<double>(pc.norm.scale), worst);
 }
 
 WeightEvalSummary summarise_weight_eval(const std::vector<CharacterWeightEval>& per_character) {

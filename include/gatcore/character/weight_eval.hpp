@@ -39,6 +39,13 @@ struct CharacterWeightEval {
 SkinWeights weights_from_super(std::span<const float> dense, std::int64_t num_bones,
                                const std::vector<std::int32_t>& joint_to_bone);
 
+// Deformation error of `predicted` against `truth` weights (both over the
+// character's joints) in the given poses: per-vertex distance between the
+// two LBS meshes per pose, the `worst` poses pooled, divided by the
+// character's height (worst_poses_error).
+DistanceStats deformation_error(const PreparedCharacter& pc, const SkinWeights& predicted, const SkinWeights& truth,
+                                std::span<const Pose> poses, int worst = 2);
+
 // Evaluates `predicted` against `truth` (both dense [n x num_bones]) on the
 // prepared (world-frame) character. `mask` ([num_bones], optional) restricts
 // precision / recall / L1 to the character's bones. Pose p of the deformation
