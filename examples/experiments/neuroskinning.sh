@@ -23,8 +23,9 @@
 # Budgets: full = every model trains until the first epoch ending after
 # --minutes (default 6) minutes of wall time (epoch cap 100000), batches of 4
 # characters x 512 random vertices (the paper: 12 x 2048; smaller steps give
-# more optimiser steps in a short budget), validating every 10th epoch; tiny = 1 epoch, batch 2, one training character per group, 2 poses
-# (CI). Deterministic given the seed and the number of epochs each model
+# more optimiser steps in a short budget), validating every 10th epoch;
+# tiny = 1 epoch, batches of 2 x 256 vertices, one training character per
+# group, 2 poses (CI). Deterministic given the seed and the number of epochs each model
 # reached (printed and recorded; a time budget makes that number depend on the
 # machine's speed).
 #
@@ -115,7 +116,7 @@ build_setting mixed modular_men modular_women animals creatures
 
 # 3. Train and evaluate every model in both settings.
 if [ "$budget" = tiny ]; then
-  train_opts=(--epochs 1 --batch 2); eval_opts=(--poses 2 --size 96)
+  train_opts=(--epochs 1 --batch 2 --sample-vertices 256); eval_opts=(--poses 2 --size 96)
 else
   train_opts=(--epochs 100000 --minutes "$minutes" --val-every 10 --batch 4 --sample-vertices 512)
   eval_opts=(--poses 16 --size 256)
