@@ -31,6 +31,9 @@ void usage(std::FILE* f) {
                "  --joint-limits FILE|humanoid  per-joint random-pose limits (JSON table, see\n"
                "             include/gatcore/character/joint_limits.hpp; 'humanoid' = the built-in table);\n"
                "             recorded in the dataset; without it every joint axis gets +-pose-angle\n"
+               "  --test-characters A,B,...  --validation-characters C,...  an explicit split instead of the\n"
+               "             seeded one: each entry names one character by the end of its path (e.g.\n"
+               "             modular_men/Punk.glb); the rest train\n"
                "usage: gat dataset export-character CHARACTER -o OUT.glb\n"
                "  writes a dataset character (e.g. procedural:humanoid:5) as a skinned glTF file\n");
 }
@@ -74,6 +77,7 @@ int cmd_dataset(int argc, char** argv) {
   std::string out;
   std::vector<std::string> inputs, motions;
   bool skip_bad = false;
+  std::string test_list, validation_list;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> std::string {
@@ -101,6 +105,8 @@ int cmd_dataset(int argc, char** argv) {
     else if (a == "--dm-step") s.delta_mush.step = static_cast<float>(number(1e-6, 1));
     else if (a == "--skip-bad") skip_bad = true;
     else if (a == "--joint-limits") s.joint_limits = load_joint_limits(value());
+    else if (a == "--test-characters") test_list = value();
+    else if (a == "--validation-characters") validation_list = value();
     else if (!a.empty() && a[0] == '-') throw gatcore::InvalidArgument("unknown option '" + a + "'");
     else inputs.push_back(a);
   }
@@ -140,7 +146,40 @@ int cmd_dataset(int argc, char** argv) {
     const Motion mo = load_bvh(m);
     std::printf("  %-60s %6zu frames  %3d joints\n", m.c_str(), mo.clip.frames.size(), mo.skeleton.num_joints());
   }
-  const DatasetDescription d = describe_dataset(good, motions, s);
+  DatasetDescription d = describe_dataset(good, motions, s);
+  if (!test_list.empty() || !validation_list.empty()) {
+    // An explicit split: every listed entry must name exactly one loaded character.
+    std::vector<int> role(good.size(), 0);  // 0 train, 1 validation, 2 test
+    auto assign = [&](const std::string& list, int r, const char* flag) {
+      std::size_t start = 0;
+      while (start <= list.size()) {
+        const std::size_t comma = std::min(list.find(',', start), list.size());
+        const std::string item = list.substr(start, comma - start);
+        start = comma + 1;
+        if (item.empty()) continue;
+        int found = -1;
+        for (std::size_t c = 0; c < good.size(); ++c) {
+          const std::string& f = good[c];
+          const bool match = f == item || (f.size() > item.size() && f.compare(f.size() - item.size(), item.size(), item) == 0 &&
+                                           f[f.size() - item.size() - 1] == '/');
+          if (!match) continue;
+          if (found >= 0)
+            throw gatcore::InvalidArgument(std::string(flag) + ": '" + item + "' names both " + good[std::size_t(found)] +
+                                           " and " + f);
+          found = static_cast<int>(c);
+        }
+        if (found < 0) throw gatcore::InvalidArgument(std::string(flag) + ": '" + item + "' names no loaded character");
+        if (role[std::size_t(found)] != 0)
+          throw gatcore::InvalidArgument(std::string(flag) + ": '" + item + "' is already in another part");
+        role[std::size_t(found)] = r;
+      }
+    };
+    assign(validation_list, 1, "--validation-characters");
+    assign(test_list, 2, "--test-characters");
+    d.split = Split{};
+    for (std::size_t c = 0; c < good.size(); ++c)
+      (role[c] == 0 ? d.split.train : role[c] == 1 ? d.split.validation : d.split.test).push_back(static_cast<std::int32_t>(c));
+  }
   save_dataset(out, d);
   std::printf("%s: %zu characters (train %zu, validation %zu, test %zu), %zu motions, Delta Mush %d x %g, "
               "random poses within %s\n", out.c_str(), d.characters.size(), d.split.train.size(),

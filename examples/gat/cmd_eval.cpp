@@ -6,12 +6,17 @@
 #include <cstdlib>
 #include <cstring>
 #include <algorithm>
+#include <filesystem>
+#include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
 #include "eval_motion.hpp"
+#include "gatcore/character/render.hpp"
 #include "gatcore/character/training_data.hpp"
+#include "gatcore/character/weight_eval.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
@@ -32,6 +37,14 @@ int usage(int rc) {
                "  --data DATASET  evaluate on a dataset's characters instead (default: the dataset the\n"
                "                  checkpoint was trained on, if any); displacement: N poses per character\n"
                "  --part P        test (default), validation or train characters of the dataset\n"
+               "  Skin-weight models on a dataset also print a per-character Markdown table (NeuroSkinning's\n"
+               "  metrics: bone precision / recall at 1e-4, L1 weight error, deformation error at the two\n"
+               "  worst random poses / height):\n"
+               "  --poses K       random poses per character for the deformation error (default 16; the\n"
+               "                  dataset's pose angle; pose seed = --seed)\n"
+               "  --json FILE     also write the table as JSON\n"
+               "  --errormaps DIR per-vertex L1 weight-error colour maps, DIR/<character>.png\n"
+               "  --size PX       error-map size (default 320)\n"
                "  --device D      cpu (default), vulkan or auto: where the model runs (see gat train --help)\n"
                "  --motion M.bvh  evaluate displacement models and the LBS / DQS baselines on every frame of\n"
                "                  retargeted motions instead (gat eval --motion X --help for its options)\n");
@@ -44,8 +57,8 @@ int gat::cmd_eval(int argc, char** argv) {
   // Motion evaluation against the reference deformer, with baselines (eval_motion.cpp).
   for (int i = 1; i < argc; ++i)
     if (!std::strcmp(argv[i], "--motion")) return gat::eval_motion(argc, argv);
-  std::string path, data, part = "test", device = "cpu";
-  long samples = 16, seed = 12345;
+  std::string path, data, part = "test", device = "cpu", json_path, errormap_dir;
+  long samples = 16, seed = 12345, poses = 16, size = 320;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
     if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help")) return usage(0);
@@ -54,6 +67,10 @@ int gat::cmd_eval(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--part") && v) part = argv[++i];
     else if (!std::strcmp(argv[i], "--samples") && v) samples = std::strtol(argv[++i], nullptr, 10);
     else if (!std::strcmp(argv[i], "--seed") && v) seed = std::strtol(argv[++i], nullptr, 10);
+    else if (!std::strcmp(argv[i], "--poses") && v) poses = std::strtol(argv[++i], nullptr, 10);
+    else if (!std::strcmp(argv[i], "--size") && v) size = std::strtol(argv[++i], nullptr, 10);
+    else if (!std::strcmp(argv[i], "--json") && v) json_path = argv[++i];
+    else if (!std::strcmp(argv[i], "--errormaps") && v) errormap_dir = argv[++i];
     else if (!std::strcmp(argv[i], "--device") && v) {
       device = argv[++i];
       if (device != "cpu" && device != "vulkan" && device != "auto") {
@@ -74,6 +91,10 @@ int gat::cmd_eval(int argc, char** argv) {
     std::fprintf(stderr, "gat eval: --samples must be positive\n");
     return 2;
   }
+  if (poses < 0 || poses > 100000 || size < 16 || size > 8192) {
+    std::fprintf(stderr, "gat eval: --poses expects [0, 100000] (got %ld), --size [16, 8192] (got %ld)\n", poses, size);
+    return 2;
+  }
   const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
   LoadedModel l = load_checkpoint(path);
   Model& m = *l.model;
@@ -85,8 +106,10 @@ int gat::cmd_eval(int argc, char** argv) {
   const auto& md = l.file.metadata;
   if (data.empty() && md.count("data_path")) data = md.at("data_path");
   std::vector<Sample> samples_;
+  std::unique_ptr<character::TrainingData> td_;
   if (!data.empty()) {
-    const character::TrainingData td = character::load_training_data(data);
+    td_ = std::make_unique<character::TrainingData>(character::load_training_data(data));
+    const character::TrainingData& td = *td_;
     if (md.count("data_hash") && md.at("data_hash") != td.hash && md.count("data_path") && md.at("data_path") == data)
       std::fprintf(stderr, "gat eval: warning: %s has changed since %s was trained on it\n", data.c_str(), path.c_str());
     const std::string bones = character::joined_bone_names(td.super);
@@ -126,8 +149,10 @@ int gat::cmd_eval(int argc, char** argv) {
   std::printf("  loss (%s, normalised targets): %.6f\n", cfg.task == Task::weights ? "KL" : "MSE", t.evaluate(data_));
   double err = 0, maxerr = 0, base = 0;
   std::int64_t count = 0, tp = 0, fp = 0, fn = 0;
+  std::vector<Tensor> predictions;
   for (const Sample& s : data_) {
     Tensor y = predict(m, s, l.norm, cfg.task == Task::weights ? cfg.top_k : 0);
+    if (cfg.task == Task::weights) predictions.push_back(y);
     for (std::int64_t i = 0; i < y.rows(); ++i, ++count) {
       double e = 0, b = 0;
       for (std::int64_t j = 0; j < y.cols(); ++j) {
@@ -149,6 +174,55 @@ int gat::cmd_eval(int argc, char** argv) {
     std::printf("  L1 weight error per vertex: mean %.5f  max %.5f\n", err / double(count), maxerr);
     std::printf("  bone precision %.3f  recall %.3f\n", double(tp) / double(std::max<std::int64_t>(1, tp + fp)),
                 double(tp) / double(std::max<std::int64_t>(1, tp + fn)));
+    if (td_) {
+      // NeuroSkinning's per-character evaluation (library: weight_eval.hpp).
+      const auto& td = *td_;
+      const auto& chars = td.part(part == "test" ? character::DatasetPart::test
+                                  : part == "validation" ? character::DatasetPart::validation
+                                                         : character::DatasetPart::train);
+      character::WeightEvalOptions eo;
+      eo.poses = int(poses);
+      eo.pose_angle = td.description.pose_angle;
+      eo.seed = std::uint32_t(seed);
+      std::vector<character::CharacterWeightEval> per;
+      for (std::size_t i = 0; i < data_.size(); ++i) {
+        const std::int32_t c = chars[i];
+        const Tensor y = predictions[i].contiguous() ? predictions[i] : predictions[i].clone();
+        const Tensor t = data_[i].target.contiguous() ? data_[i].target : data_[i].target.clone();
+        const auto& mask = td.super.mask[std::size_t(c)];
+        auto r = character::evaluate_character_weights(
+            td.characters[std::size_t(c)], std::span<const float>(y.data(), std::size_t(y.numel())),
+            std::span<const float>(t.data(), std::size_t(t.numel())), y.cols(), td.super.joint_to_bone[std::size_t(c)],
+            mask, eo, c);
+        r.name = std::filesystem::path(data_[i].name).parent_path().filename().string() + "/" +
+                 std::filesystem::path(data_[i].name).stem().string();
+        if (!errormap_dir.empty()) {
+          std::filesystem::create_directories(errormap_dir);
+          const auto& mesh = td.characters[std::size_t(c)].character.mesh;
+          character::RenderOptions ro;
+          ro.width = ro.height = int(size);
+          ro.max_error = 1.0f;  // L1 weight error in [0, 2]; one scale for every method
+          ro.view_dir = {-0.55f, -0.25f, -0.8f};
+          std::string file = r.name;
+          std::replace(file.begin(), file.end(), '/', '_');
+          const std::string png = (std::filesystem::path(errormap_dir) / (file + ".png")).string();
+          character::write_png(png, character::render_error_map(mesh.positions, mesh.triangles, r.vertex_l1, ro));
+          std::printf("  error map: %s\n", png.c_str());
+        }
+        per.push_back(std::move(r));
+      }
+      std::printf("\n%s", character::weight_eval_markdown(per).c_str());
+      std::printf("(deformation: LBS with predicted vs artist weights, %d random poses within +-%.2f rad, two worst "
+                  "poses, divided by the character's height)\n",
+                  eo.poses, double(eo.pose_angle));
+      if (!json_path.empty()) {
+        character::write_text_atomic(json_path, character::weight_eval_json(cfg.name, per, eo));
+        std::printf("  JSON: %s\n", json_path.c_str());
+      }
+    } else if (!json_path.empty() || !errormap_dir.empty()) {
+      std::fprintf(stderr, "gat eval: --json / --errormaps need a dataset (--data)\n");
+      return 2;
+    }
   } else {
     std::printf("  vertex error after correction: mean %.5f  max %.5f  (LBS alone: mean %.5f)\n", err / double(count),
                 maxerr, base / double(count));

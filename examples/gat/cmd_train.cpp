@@ -45,6 +45,7 @@ int usage(int rc) {
                "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
                "                 [--device cpu|vulkan|auto] [--minutes M] [--loss-curve FILE.png]\n"
+               "                 [--val-every K] [--sample-vertices V]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
@@ -70,6 +71,8 @@ int usage(int rc) {
                "                 GPU is there, else the CPU); checkpoints are the same on every device\n"
                "  --loss-curve F the loss curve picture, rewritten after every epoch (default: the checkpoint's\n"
                "                 path with .loss.png for its extension); the losses also go to F's .csv\n"
+               "  --val-every K  validate every K-th epoch and after the last one (default 1)\n"
+               "  --sample-vertices V  vertices per training sample (default: paper, 1000 or 2048)\n"
                "  Without --data the embedded tube character is used: displacement models learn the\n"
                "  correction of LBS in random bend/twist poses; skin-weight models learn the\n"
                "  two-bone weights of tubes of varying resolution.\n");
@@ -102,6 +105,7 @@ int gat::cmd_train(int argc, char** argv) {
   bool samples_set = false;
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
+  long val_every = 1, sample_vertices = 0;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
     const char* a = argv[i];
@@ -130,6 +134,8 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--threads") && v) { if (!parse_long(a, argv[++i], 1, 1024, threads)) return 2; }
     else if (!std::strcmp(a, "--batch") && v) { if (!parse_long(a, argv[++i], 1, 4096, batch)) return 2; }
     else if (!std::strcmp(a, "--samples") && v) { if (!parse_long(a, argv[++i], 1, 1000000, samples)) return 2; samples_set = true; }
+    else if (!std::strcmp(a, "--sample-vertices") && v) { if (!parse_long(a, argv[++i], 1, 100000000, sample_vertices)) return 2; }
+    else if (!std::strcmp(a, "--val-every") && v) { if (!parse_long(a, argv[++i], 1, 1000000, val_every)) return 2; }
     else if (!std::strcmp(a, "--minutes") && v) {
       char* end = nullptr;
       minutes = std::strtod(argv[++i], &end);
@@ -174,6 +180,7 @@ int gat::cmd_train(int argc, char** argv) {
       seed = std::stol(md.at("seed"));
       samples = std::stol(md.at("samples"));
       batch = std::stol(md.at("batch"));
+      if (md.count("sample_vertices")) sample_vertices = std::stol(md.at("sample_vertices"));
     }
     if (md.count("data_path")) {
       if (data.empty()) data = md.at("data_path");
@@ -232,6 +239,7 @@ int gat::cmd_train(int argc, char** argv) {
   opt.seed = std::uint64_t(seed);
   opt.lr = lr;
   if (batch > 0) opt.batch_size = int(batch);
+  if (sample_vertices > 0) opt.sample_vertices = sample_vertices;
   // Parameters are drawn (or loaded) on the CPU and moved before the
   // optimiser allocates its moments next to them.
   model->to(dev);
@@ -247,7 +255,8 @@ int gat::cmd_train(int argc, char** argv) {
               dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu");
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
                                            {"samples", std::to_string(samples)},
-                                           {"batch", std::to_string(opt.batch_size)}};
+                                           {"batch", std::to_string(opt.batch_size)},
+                                           {"sample_vertices", std::to_string(opt.sample_vertices)}};
   // The node features a character command (predict-weights, deform) must
   // compute for this model (character_model.hpp).
   extra["features"] = td ? (cfg.task == Task::weights ? "neuroskinning" : "densegats") : "tube";
@@ -256,6 +265,14 @@ int gat::cmd_train(int argc, char** argv) {
     extra["data_path"] = std::filesystem::absolute(data).string();
     extra["data_hash"] = td->hash;
     extra["skeleton"] = character::joined_bone_names(td->super);
+    // For people reading the checkpoint: the feature layout ("features" above
+    // is the key predict-weights / deform dispatch on); the columns follow "skeleton" (bone names normalised by
+    // character::normalise_bone_name), the statistics are norm.mean / norm.inv_std.
+    extra["feature_layout"] = cfg.task == Task::weights
+                            ? "neuroskinning: rest position (3), rest normal (3), distance to each skeleton bone "
+                              "segment; world frame, hips at the origin, height 1 (character::compute_normalisation)"
+                            : "densegats: posed position (3), posed normal (3), distance to each skeleton joint; "
+                              "normalised like neuroskinning";
   } else {
     extra["data"] = "embedded tube character";
     extra["skeleton"] = "upper_arm,forearm";
@@ -292,14 +309,18 @@ int gat::cmd_train(int argc, char** argv) {
                    hms(eta).c_str());
       std::fflush(stderr);
     };
-    const EpochStats st = trainer.run_epoch(train, val, progress);
+    const bool last = trainer.epoch() + 1 >= epochs;
+    const bool validate = last || (trainer.epoch() + 1) % val_every == 0;
+    const EpochStats st = trainer.run_epoch(train, validate ? val : std::vector<Sample>{}, progress);
     history.push_back({st.epoch, st.train_loss, st.val_loss, double(st.lr), st.seconds});
     extra["loss_history"] = gatcore::character::format_history(history);
     save_checkpoint(out, *model, norm, &trainer, extra);
     gatcore::character::write_loss_outputs(history, curve);
     if (tty) std::fprintf(stderr, "\r\033[K");
-    std::printf("epoch %d/%ld  train loss %.6f  val loss %.6f  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
-                epochs, st.train_loss, st.val_loss, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
+    char val_text[32] = "-";
+    if (st.val_loss >= 0) std::snprintf(val_text, sizeof val_text, "%.6f", st.val_loss);
+    std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
+                epochs, st.train_loss, val_text, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
                 out.c_str());
     std::fflush(stdout);
     const double trained_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

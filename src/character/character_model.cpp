@@ -14,8 +14,10 @@ FeatureKind checkpoint_features(const models::CheckpointFile& f) {
     return it != md.end() ? models::ModelConfig::from_text(it->second).task : models::Task::displacement;
   };
   if (const auto it = md.find("features"); it != md.end()) {
-    if (it->second == "neuroskinning") return FeatureKind::neuroskinning;
-    if (it->second == "densegats") return FeatureKind::densegats;
+    // Exact names; a longer description starting with one (checkpoints of an
+    // interim version wrote the layout here) means the same.
+    if (it->second.rfind("neuroskinning", 0) == 0) return FeatureKind::neuroskinning;
+    if (it->second.rfind("densegats", 0) == 0) return FeatureKind::densegats;
     return FeatureKind::tube;
   }
   if (!md.count("data_path")) return FeatureKind::tube;

@@ -1,0 +1,153 @@
+// NeuroSkinning's per-character weight evaluation (weight_eval.hpp) against
+// hand-computed values on a rigid two-bone tube.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "character_fixtures.hpp"
+#include "gatcore/character/dataset.hpp"
+#include "gatcore/character/weight_eval.hpp"
+#include "gatcore/error.hpp"
+
+using namespace gatcore::character;
+using Catch::Matchers::Contains;
+
+namespace {
+
+// Tube from y = 0 to 2 (height 2), radius 0.25, 24 rings x 24 segments plus
+// two cap centres; joint "root" at the origin, "bone1" at y = 1; blend 0:
+// vertices with y < 1 belong to root only, the others to bone1 only.
+PreparedCharacter rigid_tube() { return prepare_character(charfix::tube_character(24, 24, 2.0f, 0.25f, 0.0f)); }
+
+// Dense weights over a 3-bone super skeleton in which the tube's joints are
+// bones 0 and 2 (bone 1 belongs to other characters: mask 0).
+const std::vector<std::int32_t> kJointToBone{0, 2};
+const std::vector<std::uint8_t> kMask{1, 0, 1};
+
+std::vector<float> dense_truth(const PreparedCharacter& pc) {
+  const auto& w = pc.character.mesh.weights;
+  std::vector<float> d(static_cast<std::size_t>(w.num_vertices()) * 3, 0.0f);
+  for (std::int64_t v = 0; v < w.num_vertices(); ++v)
+    for (std::int64_t k = w.ptr[v]; k < w.ptr[v + 1]; ++k) d[v * 3 + kJointToBone[w.joint[k]]] += w.weight[k];
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("weights_from_super maps bones back to joints and renormalises", "[character][weighteval]") {
+  // 2 vertices x 4 bones; the character's joint 0 is bone 2, joint 1 is bone 0; bone 3 is not its own.
+  const std::vector<float> dense{0.2f, 0.0f, 0.6f, 0.2f,  //
+                                 0.0f, 0.0f, 0.0f, 1.0f};
+  const SkinWeights w = weights_from_super(dense, 4, {2, 0});
+  REQUIRE(w.ptr == std::vector<std::int64_t>{0, 2, 2});
+  CHECK(w.joint == std::vector<std::int32_t>{0, 1});
+  CHECK(w.weight[0] == Approx(0.75f));
+  CHECK(w.weight[1] == Approx(0.25f));
+  CHECK_THROWS_WITH(weights_from_super(dense, 4, {2, 2}), Contains("both map to bone 2"));
+  CHECK_THROWS_WITH(weights_from_super(dense, 4, {5}), Contains("joint 0 maps to bone 5 of 4"));
+  CHECK_THROWS_WITH(weights_from_super(dense, 3, {0}), Contains("8 weights for 3 bones"));
+}
+
+TEST_CASE("weight evaluation of a perfect prediction is exact", "[character][weighteval]") {
+  const PreparedCharacter pc = rigid_tube();
+  const auto truth = dense_truth(pc);
+  WeightEvalOptions o;
+  o.poses = 4;
+  const auto r = evaluate_character_weights(pc, truth, truth, 3, kJointToBone, kMask, o);
+  CHECK(r.vertices == 24 * 24 + 2);
+  CHECK(r.height == Approx(2.0));
+  CHECK(r.weights.precision == 1.0);
+  CHECK(r.weights.recall == 1.0);
+  CHECK(r.weights.l1_mean == 0.0);
+  CHECK(r.deformation.mean == 0.0);
+  CHECK(r.deformation.max == 0.0);
+}
+
+TEST_CASE("weight evaluation: everything on the root bone, hand-computed", "[character][weighteval]") {
+  const PreparedCharacter pc = rigid_tube();
+  const auto truth = dense_truth(pc);
+  const std::int64_t n = pc.character.mesh.num_vertices();
+  std::vector<float> pred(static_cast<std::size_t>(n) * 3, 0.0f);
+  for (std::int64_t v = 0; v < n; ++v) pred[v * 3 + 0] = 1.0f;
+  // Rings at y = 2r/23 >= 1 (r = 12..23) and the top cap centre are bone1's.
+  const std::int64_t upper = 12 * 24 + 1, lower = n - upper;
+  WeightEvalOptions o;
+  o.poses = 0;
+  const auto r = evaluate_character_weights(pc, pred, truth, 3, kJointToBone, kMask, o);
+  // Every vertex selects the root; only the lower ones truly have it; each
+  // vertex has exactly one true bone.
+  CHECK(r.weights.precision == Approx(double(lower) / double(n)));
+  CHECK(r.weights.recall == Approx(double(lower) / double(n)));
+  // L1: |1 - 0| + |0 - 1| = 2 on the upper vertices, 0 below.
+  CHECK(r.weights.l1_mean == Approx(2.0 * double(upper) / double(n)));
+  CHECK(r.weights.l1_max == Approx(2.0));
+  CHECK(r.vertex_l1.back() == Approx(2.0f));  // the top cap centre
+  CHECK(r.vertex_l1.front() == 0.0f);
+
+  // bone1 turned 90 degrees about +z: an upper vertex p = (x, y - 1, z)
+  // relative to the joint goes to (-(y - 1), x, z), the root-weighted
+  // prediction stays: distance sqrt(2) * sqrt(x^2 + (y - 1)^2).
+  Pose bent = pc.rest;
+  bent.local[1].rotation = quat_mul(bent.local[1].rotation, quat_from_axis_angle({0.0f, 0.0f, 1.0f}, 1.5707963f));
+  const std::vector<Pose> poses{pc.rest, bent};
+  double sum = 0, mx = 0;
+  const auto& p = pc.character.mesh.positions;
+  for (std::int64_t v = 0; v < n; ++v) {
+    if (p[3 * v + 1] < 1.0f - 1e-6f) continue;
+    const double x = p[3 * v], y1 = p[3 * v + 1] - 1.0;
+    const double d = std::sqrt(2.0) * std::sqrt(x * x + y1 * y1);
+    sum += d, mx = std::max(mx, d);
+  }
+  const SkinWeights pw = weights_from_super(pred, 3, kJointToBone), tw = pc.character.mesh.weights;
+  const DistanceStats worst1 = deformation_error(pc, pw, tw, poses, 1);  // the bent pose only
+  CHECK(worst1.count == n);
+  CHECK(worst1.mean == Approx(sum / double(n) / 2.0).epsilon(1e-5));
+  CHECK(worst1.max == Approx(mx / 2.0).epsilon(1e-5));
+  CHECK(mx == Approx(std::sqrt(2.0) * std::sqrt(1.0 + 0.0625)));  // the top ring at x = +-0.25
+  // Both poses pooled: the rest pose adds n zero distances.
+  const DistanceStats worst2 = deformation_error(pc, pw, tw, poses, 2);
+  CHECK(worst2.count == 2 * n);
+  CHECK(worst2.mean == Approx(sum / double(2 * n) / 2.0).epsilon(1e-5));
+  CHECK(worst2.max == Approx(mx / 2.0).epsilon(1e-5));
+  CHECK_THROWS_WITH(deformation_error(pc, weights_from_super(std::vector<float>(3, 0.0f), 3, kJointToBone), tw, poses),
+                    Contains("1 predicted and") && Contains(std::to_string(n) + " vertices"));
+}
+
+TEST_CASE("weight evaluation: summary, Markdown and JSON", "[character][weighteval]") {
+  CharacterWeightEval a, b;
+  a.name = "men/A";
+  a.vertices = 10;
+  a.weights = {0.5, 1.0, 0.2, 1.5};
+  a.deformation.mean = 0.01, a.deformation.max = 0.1;
+  b.name = "women/B";
+  b.vertices = 20;
+  b.weights = {0.7, 0.8, 0.4, 1.0};
+  b.deformation.mean = 0.03, b.deformation.max = 0.05;
+  const auto s = summarise_weight_eval({a, b});
+  CHECK(s.characters == 2);
+  CHECK(s.precision == Approx(0.6));
+  CHECK(s.recall == Approx(0.9));
+  CHECK(s.l1_mean == Approx(0.3));
+  CHECK(s.l1_max == Approx(1.5));
+  CHECK(s.deform_mean == Approx(0.02));
+  CHECK(s.deform_max == Approx(0.1));
+  const std::string md = weight_eval_markdown({a, b});
+  CHECK_THAT(md, Contains("| men/A | 10 | 0.500 | 1.000 | 0.2000 | 1.5000 | 0.01000 | 0.1000 |"));
+  CHECK_THAT(md, Contains("| **overall** |  | 0.600 | 0.900 | 0.3000 | 1.5000 | 0.02000 | 0.1000 |"));
+  const auto j = nlohmann::json::parse(weight_eval_json("fc", {a, b}, WeightEvalOptions{}));
+  CHECK(j.at("method") == "fc");
+  CHECK(j.at("characters").size() == 2);
+  CHECK(j.at("characters")[1].at("name") == "women/B");
+  CHECK(j.at("overall").at("recall").get<double>() == Approx(0.9));
+  const auto path = (std::filesystem::temp_directory_path() / "gatcore_weight_eval.json").string();
+  write_text_atomic(path, "{}\n");
+  std::ifstream f(path);
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  CHECK(text == "{}\n");
+  CHECK_FALSE(std::filesystem::exists(path + ".tmp"));
+  CHECK_THROWS_WITH(write_text_atomic("/nonexistent_dir_gatcore/x.json", "{}"), Contains("/nonexistent_dir_gatcore/x.json"));
+}
