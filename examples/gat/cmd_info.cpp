@@ -1,6 +1,7 @@
-// `gat info FILE`: what a character or motion file holds (vertices,
-// components, joints, influences per vertex, clips). Bad files exit non-zero
-// with the reason.
+// `gat info FILE`: what a character, motion, dataset, point cache or model
+// file holds (vertices, components, joints, influences per vertex, clips,
+// model configuration and training state). Bad files exit non-zero with the
+// reason.
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -12,8 +13,10 @@
 #include "gatcore/character/bake.hpp"
 #include "gatcore/character/dataset.hpp"
 #include "gatcore/character/import.hpp"
+#include "gatcore/character/loss_curve.hpp"
 #include "gatcore/character/motion.hpp"
 #include "gatcore/error.hpp"
+#include "gatcore/models/checkpoint.hpp"
 
 using namespace gatcore::character;
 
@@ -113,13 +116,67 @@ void print_point_cache(const std::string& path, const PointCache& pc) {
   }
 }
 
+std::string metadata(const gatcore::models::CheckpointFile& f, const char* key, const char* fallback = "-") {
+  const auto it = f.metadata.find(key);
+  return it == f.metadata.end() ? fallback : it->second;
+}
+
+// A checkpoint: loading it fully checks the file (magic, checksum, every
+// tensor against the configuration) before anything is printed.
+void print_model(const std::string& path) {
+  const gatcore::models::LoadedModel l = gatcore::models::load_checkpoint(path);
+  const gatcore::models::ModelConfig& c = l.model->config();
+  std::int64_t params = 0;
+  for (const auto& p : l.model->parameters()) params += p.value().rows() * p.value().cols();
+  std::int64_t optim = 0;
+  for (const auto& [name, t] : l.file.tensors)
+    if (name.rfind("optim.", 0) == 0) optim += t.rows() * t.cols();
+  std::printf("model      %s (%s), %lld parameters\n", c.name.c_str(),
+              c.task == gatcore::models::Task::weights ? "skin weights" : "displacement",
+              static_cast<long long>(params));
+  // Older checkpoints have no "features" key: a dataset model's features
+  // follow its task (as predict-weights / deform read them).
+  std::string features = metadata(l.file, "features", "");
+  if (features.empty())
+    features = !l.file.metadata.count("data_path") ? "tube"
+               : c.task == gatcore::models::Task::weights ? "neuroskinning" : "densegats";
+  std::printf("features   %lld in, %lld out (%s)\n", static_cast<long long>(c.in_dim), static_cast<long long>(c.out_dim),
+              features.c_str());
+  std::printf("config\n");
+  const std::string cfg = metadata(l.file, "config");
+  for (std::size_t a = 0; a < cfg.size();) {
+    const std::size_t b = std::min(cfg.find('\n', a), cfg.size());
+    if (b > a) std::printf("  %s\n", cfg.substr(a, b - a).c_str());
+    a = b + 1;
+  }
+  std::printf("trained    %s epochs, lr %s, %s Adam steps%s\n", metadata(l.file, "epoch", "0").c_str(),
+              metadata(l.file, "lr").c_str(), metadata(l.file, "adam_steps", "0").c_str(),
+              optim ? " (resumable: optimiser state saved)" : "");
+  std::printf("data       %s", metadata(l.file, "data").c_str());
+  if (l.file.metadata.count("data_path")) std::printf(" %s", l.file.metadata.at("data_path").c_str());
+  std::printf("\n");
+  if (l.file.metadata.count("skeleton")) {
+    const std::string& sk = l.file.metadata.at("skeleton");
+    std::printf("bones      %lld (%s%s)\n", static_cast<long long>(std::count(sk.begin(), sk.end(), ',') + (sk.empty() ? 0 : 1)),
+                sk.substr(0, 60).c_str(), sk.size() > 60 ? ", ..." : "");
+  }
+  if (l.file.metadata.count("loss_history")) {
+    const auto h = parse_history(l.file.metadata.at("loss_history"), path);
+    if (!h.empty()) {
+      std::printf("loss       %zu epochs recorded; last: train %.6g", h.size(), h.back().train);
+      if (h.back().val >= 0) std::printf(", validation %.6g", h.back().val);
+      std::printf("\n");
+    }
+  }
+}
+
 }  // namespace
 
 int cmd_info(int argc, char** argv) {
   if (argc != 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     std::fprintf(argc == 2 ? stdout : stderr,
                  "usage: gat info FILE\n  FILE: a character (.glb / .gltf / .fbx / .dae), a motion (.bvh), a dataset (.json) or a\n"
-                 "        point cache (.pc2, as gat deform writes)\n");
+                 "        point cache (.pc2, as gat deform writes) or a model checkpoint (.gcm / .safetensors)\n");
     return argc == 2 ? 0 : 2;
   }
   const std::string path = argv[1];
@@ -139,8 +196,12 @@ int cmd_info(int argc, char** argv) {
     print_point_cache(path, read_point_cache(path));
     return 0;
   }
+  if (ends_with(path, ".gcm") || ends_with(path, ".safetensors")) {
+    print_model(path);
+    return 0;
+  }
   throw gatcore::InvalidArgument(path +
-                                 ": unknown file type (expected .glb, .gltf, .fbx, .dae, .bvh, .pc2 or a dataset .json)");
+                                 ": unknown file type (expected .glb, .gltf, .fbx, .dae, .bvh, .pc2, .gcm / .safetensors or a dataset .json)");
 }
 
 }  // namespace gat
