@@ -7,10 +7,15 @@
 
 #include <string>
 
+#include "bench/bench_models.hpp"
 #include "bench/bench_util.hpp"
 #include "kernels/simd.hpp"
 
 int main(int argc, char** argv) {
+  // Child mode of model_peak_rss: nothing but one training workload.
+  const std::string flag = "--gatbench_peak_rss=";
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]).rfind(flag, 0) == 0) return gatbench::peak_rss_main(argv[i] + flag.size(), 3);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::AddCustomContext("gatcore_simd", gatcore::cpu::simd_level_name(gatcore::cpu::simd_level()));
