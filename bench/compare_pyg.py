@@ -176,9 +176,11 @@ def build_models(torch, pyg):
         def forward(self, x, ei, pool):
             src, dst = ei
             h = self.C(x).view(-1, self.heads, self.dim)
-            logits = (h[dst] * h[src]).sum(-1) / self.dim ** 0.5  # [E, heads]
+            # index_select rather than h[src]: its backward is index_add_, not the slower index_put_
+            h_src = h.index_select(0, src)
+            logits = (h.index_select(0, dst) * h_src).sum(-1) / self.dim ** 0.5  # [E, heads]
             alpha = pyg.utils.softmax(logits, dst, num_nodes=x.shape[0])
-            msg = alpha.unsqueeze(-1) * h[src]
+            msg = alpha.unsqueeze(-1) * h_src
             conv = torch.zeros_like(h).index_add_(0, dst, msg).view(x.shape[0], -1)
             conv = lrelu(conv)
             return torch.cat([x, conv, torch.sparse.mm(pool, conv)], 1)
