@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
+#include <vector>
 
 #include "kernels/gemm_impl.hpp"
 
@@ -189,12 +190,95 @@ void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf) {
   }
 }
 
+// ---- transposed A, n <= 8 (weight gradients of the GAT blocks' 8-wide self
+// stream and of the 3-wide output layer) ----------------------------------
+// With so few columns the register tile above wastes half of each vector and
+// is bound by its broadcasts. With A transposed, C's columns are contiguous
+// in A's rows, so this kernel vectorises along m instead, op(B) (k x n,
+// small) copied to a contiguous buffer. (The row-major-A counterpart, a
+// dot-product formulation, measured no faster than the register tile and is
+// not used.)
+
+// op(B) as bt[j * kpad + kk] (kpad = k rounded up to 16, zero-padded): one
+// contiguous row of k per output column.
+void pack_b_columns(const GemmArgs& g, std::int64_t k, std::int64_t kpad, float* bt) {
+  for (std::int64_t j = 0; j < g.n; ++j) {
+    float* d = bt + j * kpad;
+    for (std::int64_t kk = 0; kk < k; ++kk) d[kk] = g.trans_b ? g.b[j * g.ldb + kk] : g.b[kk * g.ldb + j];
+    for (std::int64_t kk = k; kk < kpad; ++kk) d[kk] = 0.0f;
+  }
+}
+
+inline float combine(float acc, float* c, float alpha, float beta) {
+  return beta == 0.0f ? alpha * acc : alpha * acc + beta * *c;
+}
+
+// Transposed op(A) (A stored [k, m]): C[i..i+48, j] accumulate A[kk, i..i+48]
+// times op(B)(kk, j), straight from A's contiguous rows; k in order.
+template <int N>
+void narrow_cols(const GemmArgs& g, std::int64_t k, const float* bt, std::int64_t kpad) {
+  constexpr int V = 3;
+  for (std::int64_t i0 = 0; i0 < g.m; i0 += 16 * V) {
+    __mmask16 mask[V];
+    for (int v = 0; v < V; ++v) {
+      const std::int64_t rem = g.m - i0 - 16 * v;
+      mask[v] = rem >= 16 ? __mmask16(0xFFFF) : rem <= 0 ? __mmask16(0) : __mmask16((1u << rem) - 1u);
+    }
+    __m512 acc[V][N];
+#pragma GCC unroll 3
+    for (int v = 0; v < V; ++v)
+#pragma GCC unroll 8
+      for (int j = 0; j < N; ++j) acc[v][j] = _mm512_setzero_ps();
+    for (std::int64_t kk = 0; kk < k; ++kk) {
+      const float* arow = g.a + kk * g.lda + i0;
+      __m512 a[V];
+#pragma GCC unroll 3
+      for (int v = 0; v < V; ++v) a[v] = _mm512_maskz_loadu_ps(mask[v], arow + 16 * v);
+#pragma GCC unroll 8
+      for (int j = 0; j < N; ++j) {
+        const __m512 b = _mm512_set1_ps(bt[j * kpad + kk]);
+#pragma GCC unroll 3
+        for (int v = 0; v < V; ++v) acc[v][j] = _mm512_fmadd_ps(a[v], b, acc[v][j]);
+      }
+    }
+    alignas(64) float t[16];
+    for (int v = 0; v < V; ++v) {
+      const std::int64_t lanes = std::min<std::int64_t>(16, g.m - i0 - 16 * v);
+      for (int j = 0; j < N; ++j) {
+        _mm512_store_ps(t, acc[v][j]);
+        for (std::int64_t l = 0; l < lanes; ++l) {
+          float* c = g.c + (i0 + 16 * v + l) * g.ldc + j;
+          *c = combine(t[l], c, g.alpha, g.beta);
+        }
+      }
+    }
+  }
+}
+
+void gemm_narrow(const GemmArgs& g, std::int64_t k) {
+  thread_local std::vector<float> bt;
+  const std::int64_t kpad = (k + 15) / 16 * 16;
+  bt.resize(static_cast<std::size_t>(kpad * g.n));
+  pack_b_columns(g, k, kpad, bt.data());
+  switch (g.n) {
+    case 1: narrow_cols<1>(g, k, bt.data(), kpad); break;
+    case 2: narrow_cols<2>(g, k, bt.data(), kpad); break;
+    case 3: narrow_cols<3>(g, k, bt.data(), kpad); break;
+    case 4: narrow_cols<4>(g, k, bt.data(), kpad); break;
+    case 5: narrow_cols<5>(g, k, bt.data(), kpad); break;
+    case 6: narrow_cols<6>(g, k, bt.data(), kpad); break;
+    case 7: narrow_cols<7>(g, k, bt.data(), kpad); break;
+    default: narrow_cols<8>(g, k, bt.data(), kpad); break;
+  }
+}
+
 }  // namespace
 
 void gemm_packed_avx512(const GemmArgs& g) {
   const std::int64_t k = g.trans_a ? g.a_rows : g.a_cols;
   if (g.m == 0 || g.n == 0) return;
   // gemm() handles k == 0 and alpha == 0 itself (C = beta C) before calling a tile kernel.
+  if (g.n <= 8 && g.trans_a) return gemm_narrow(g, k);
   thread_local Buffers buf;
   if (g.n <= 16)
     gemm_blocked<24, 1>(g, k, buf);
