@@ -392,7 +392,8 @@ def main():
                       f"--benchmark_repetitions={args.repeats}", "--benchmark_report_aggregates_only=true"])
         context = j["context"]
         for b in j["benchmarks"]:
-            if b.get("aggregate_name") == "median":
+            # the median of the repetitions; with --repeats 1 there are no aggregates, only the run
+            if b.get("aggregate_name") == "median" or (b.get("run_type") == "iteration" and b["run_name"] not in bench):
                 bench[b["run_name"]] = b
     if peaks:
         j = gatbench([p[1] for p in peaks], [])
