@@ -13,8 +13,9 @@
 // path depends on where the per-thread split falls), so the builds are
 // compiled with EIGEN_DONT_PARALLELIZE and gemm() threads itself: C is cut
 // into fixed tiles (independent of the thread count), each tile is one serial
-// Eigen product, and the tiles are spread over the OpenMP threads. Every
-// element of C is then computed the same way whatever the thread count.
+// product (Eigen's or the packed kernel's), and the tiles are spread over the
+// OpenMP threads. Every element of C is then computed the same way whatever
+// the thread count.
 #include "kernels/gemm.hpp"
 
 #include <omp.h>
