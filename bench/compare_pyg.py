@@ -363,6 +363,7 @@ def main():
     ap.add_argument("--min-time", type=float, default=2.0, help="seconds of timed repeats at least, per workload")
     ap.add_argument("--only", default="", help="comma-separated workload names (default: all)")
     ap.add_argument("--json", default="", help="also write the results here")
+    ap.add_argument("--skip-memory", action="store_true", help="timings only (no peak-memory children)")
     ap.add_argument("--child", default="")
     ap.add_argument("--child-mode", default="time")
     args = ap.parse_args()
@@ -374,8 +375,9 @@ def main():
     work = [w for w in WORKLOADS if not only or w[0] in only]
     peaks = [p for p in PEAK if not only or p[0] in only]
 
-    # gatcore: gatbench over exactly these benchmarks: timings (median of
-    # repetitions), then the peak-memory children (one run each).
+    # gatcore: gatbench over exactly these benchmarks: the peak-memory
+    # children (one run each), then each timing (median of repetitions) right
+    # before the PyTorch side of the same workload.
     env = dict(os.environ, OMP_NUM_THREADS=str(args.threads))
 
     def gatbench(names, extra):
@@ -386,8 +388,10 @@ def main():
 
     bench = {}
     context = {}
-    if work:
-        j = gatbench([w[1].split("/real_time")[0] for w in work],
+
+    def gatbench_time(bname):
+        nonlocal context
+        j = gatbench([bname.split("/real_time")[0]],
                      [f"--benchmark_min_time={args.min_time / args.repeats}",
                       f"--benchmark_repetitions={args.repeats}", "--benchmark_report_aggregates_only=true"])
         context = j["context"]
@@ -395,7 +399,8 @@ def main():
             # the median of the repetitions; with --repeats 1 there are no aggregates, only the run
             if b.get("aggregate_name") == "median" or (b.get("run_type") == "iteration" and b["run_name"] not in bench):
                 bench[b["run_name"]] = b
-    if peaks:
+
+    if peaks and not args.skip_memory:
         j = gatbench([p[1] for p in peaks], [])
         context = j["context"]
         for b in j["benchmarks"]:
@@ -410,11 +415,15 @@ def main():
 
     rows = []
     for name, bname, label in work:
-        py = run_child(name, "time", args)["ms"]
+        # gatcore, then PyTorch, back to back per workload: on a shared
+        # machine the load drifts, and adjacent runs see about the same load.
+        gatbench_time(bname)
         gc = gatcore_ms(bname)
-        rows.append({"workload": label, "pytorch_ms": py, "gatcore_ms": gc, "speedup": py / gc})
+        py = run_child(name, "time", args)["ms"]
+        rows.append({"workload": label, "pytorch_ms": py, "gatcore_ms": gc, "speedup": py / gc,
+                     "load1": float(open("/proc/loadavg").read().split()[0])})
     mem = []
-    for name, bname in peaks:
+    for name, bname in ([] if args.skip_memory else peaks):
         py = run_child(name, "rss", args)
         b = bench.get(bname, {})
         mem.append({"workload": name, "pytorch_peak_MiB": py["peak_kib"] / 1024,
@@ -425,9 +434,9 @@ def main():
     load = open("/proc/loadavg").read().split()[:3]
     print(f"threads {args.threads} both sides; load average at the end: {' '.join(load)}; "
           f"OPENBLAS_CORETYPE={os.environ.get('OPENBLAS_CORETYPE', '(unset)')}")
-    print(f"{'workload':42s} {'PyTorch ms':>11s} {'gatcore ms':>11s} {'ratio':>7s}")
+    print(f"{'workload':42s} {'PyTorch ms':>11s} {'gatcore ms':>11s} {'ratio':>7s}  load (1 min, after the pair)")
     for r in rows:
-        print(f"{r['workload']:42s} {r['pytorch_ms']:11.2f} {r['gatcore_ms']:11.2f} {r['speedup']:6.1f}x")
+        print(f"{r['workload']:42s} {r['pytorch_ms']:11.2f} {r['gatcore_ms']:11.2f} {r['speedup']:6.1f}x  {r['load1']:.1f}")
     print()
     print(f"{'peak memory (MiB)':42s} {'PyTorch':>11s} {'gatcore':>11s} {'ratio':>7s}   (added by the steps: PyTorch / gatcore)")
     for m in mem:
