@@ -305,6 +305,7 @@ BENCHMARK(neighbour_mean_bwd)->Apply(mesh_sizes);
 
 // ---- GEMM on the model's layer shapes ----------------------------------------------------------------
 // Args: M (rows = nodes), K (input width), N (output width), which product:
+// (2048^3 is the large square product that states the machine's GEMM rate)
 //   0 fwd: C[M,N]  = A[M,K] B[K,N]
 //   1 dA:  dA[M,K] += dC[M,N] B^T    (input gradient)
 //   2 dB:  dB[K,N] += A^T dC[M,N]     (weight gradient)
@@ -343,6 +344,8 @@ BENCHMARK(gemm)
     ->ArgNames({"M", "K", "N", "op"})
     ->ArgsProduct({{8000}, {504}, {512}, {0, 1, 2}})
     ->ArgsProduct({{8000}, {392}, {64}, {0, 1, 2}})
+    ->ArgsProduct({{8000}, {504}, {8}, {0, 1, 2}})  // the self-reinforced stream of a GAT block
+    ->Args({2048, 2048, 2048, 0})                   // large square: the machine's sgemm rate
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 

@@ -1,4 +1,5 @@
-// GEMM through Eigen (the library's GEMM for now).
+// GEMM: the packed AVX-512 kernel of gemm_packed_avx512.cpp on AVX-512
+// CPUs, Eigen otherwise.
 //
 // SIMD: Eigen picks its SIMD code at compile time and the library is built
 // without -march flags, so Eigen is compiled three times: here for the
@@ -12,14 +13,17 @@
 // path depends on where the per-thread split falls), so the builds are
 // compiled with EIGEN_DONT_PARALLELIZE and gemm() threads itself: C is cut
 // into fixed tiles (independent of the thread count), each tile is one serial
-// Eigen product, and the tiles are spread over the OpenMP threads. Every
-// element of C is then computed the same way whatever the thread count.
+// product (Eigen's or the packed kernel's), and the tiles are spread over the
+// OpenMP threads. Every element of C is then computed the same way whatever
+// the thread count.
 #include "kernels/gemm.hpp"
 
 #include <omp.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <memory>
+#include <string>
 
 #include "kernels/gemm_impl.hpp"
 #include "kernels/nn_detail.hpp"
@@ -60,6 +64,16 @@ constexpr std::int64_t kSplitKMinChunk = 1000;
 constexpr std::int64_t kSplitKMax = 8;
 // Below this many flops one thread does all tiles (same result, less overhead).
 constexpr double kParallelMinFlops = 4.0e6;
+
+// GATCORE_GEMM=eigen: Eigen's AVX-512 product instead of the packed kernel
+// (read once; for before/after measurements).
+bool eigen_requested() {
+  static const bool eigen = [] {
+    const char* e = std::getenv("GATCORE_GEMM");
+    return e != nullptr && std::string(e) == "eigen";
+  }();
+  return eigen;
+}
 }  // namespace
 
 void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha, float beta) {
@@ -99,7 +113,7 @@ void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Te
   Fn fn = &detail::gemm_eigen_baseline;
 #if defined(__x86_64__) && defined(__GNUC__)
   switch (simd_level()) {
-    case SimdLevel::avx512: fn = &detail::gemm_eigen_avx512; break;
+    case SimdLevel::avx512: fn = eigen_requested() ? &detail::gemm_eigen_avx512 : &detail::gemm_packed_avx512; break;
     case SimdLevel::avx2: fn = &detail::gemm_eigen_avx2; break;
     case SimdLevel::scalar: break;
   }

@@ -17,6 +17,9 @@ struct GemmArgs {
   float alpha, beta;
 };
 
+// Own packed AVX-512 kernel (gemm_packed_avx512.cpp), the AVX-512 path;
+// GATCORE_GEMM=eigen selects Eigen's AVX-512 build instead (for comparison).
+void gemm_packed_avx512(const GemmArgs& g);
 void gemm_eigen_baseline(const GemmArgs& g);
 // Defined only on x86-64 builds (gemm_avx2.cpp / gemm_avx512.cpp).
 void gemm_eigen_avx2(const GemmArgs& g);

