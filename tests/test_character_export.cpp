@@ -258,7 +258,7 @@ TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f, 
   auto model = small_model("densegats", std::int64_t(bones.size()));
   model->fold_batch_norm();
   const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
-  const Motion motion = load_bvh(std::string(GATCORE_SOURCE_DIR) + "/examples/data/swing.bvh");
+  const Motion motion = load_bvh(charfix::write_temp("swing.bvh", procedural_swing_bvh()));
   const Clip clip = retarget(motion, d.prepared.character.skeleton, mat4_identity());
   REQUIRE(clip.frames.size() >= 4);
   const models::Normaliser norm =
@@ -434,7 +434,7 @@ TEST_CASE("deform on Vulkan matches the CPU", "[character][export][deform][vulka
   vk->to(Device::vulkan);
   vk->fold_batch_norm();
   const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
-  const Clip clip = retarget(load_bvh(std::string(GATCORE_SOURCE_DIR) + "/examples/data/swing.bvh"),
+  const Clip clip = retarget(load_bvh(charfix::write_temp("swing.bvh", procedural_swing_bvh())),
                              d.prepared.character.skeleton, mat4_identity());
   const models::Normaliser norm =
       fit_norm(features_in_bone_order(make_densegats_sample(d.prepared, clip.frames[0], 0, 0).features, d.mapping), true);

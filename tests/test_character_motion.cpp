@@ -9,6 +9,7 @@
 #include "gatcore/character/features.hpp"
 #include "gatcore/character/gltf.hpp"
 #include "gatcore/character/motion.hpp"
+#include "gatcore/character/procedural.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;
@@ -165,6 +166,23 @@ Frame Time: 0.0333333
         CHECK(pos(b, tj)[k] - pos(b, th)[k] == Approx(pos(a, sj)[k] - pos(a, sh)[k]).margin(1e-4));
     }
   }
+}
+
+TEST_CASE("the procedural swing motion imports as a CMU-named BVH and retargets", "[character][bvh][procedural]") {
+  const Motion m = load_bvh(charfix::write_temp("swing.bvh", procedural_swing_bvh()));
+  CHECK(m.skeleton.num_joints() == 20);
+  REQUIRE(m.clip.frames.size() == 24);
+  CHECK(m.clip.fps == Approx(30.0f).epsilon(1e-3));
+  for (const char* name : {"Hips", "LeftUpLeg", "RightForeArm", "Head"}) CHECK(m.skeleton.find(name) >= 0);
+  const std::int32_t hips = m.skeleton.find("Hips");
+  // The hips move 0.6 per frame and bob between 15.5 and 15.8.
+  CHECK(pos(global_transforms(m.skeleton, m.clip.frames[12]), hips)[2] == Approx(7.2f).margin(1e-4));
+  CHECK(pos(global_transforms(m.skeleton, m.clip.frames[6]), hips)[1] == Approx(15.8f).margin(1e-4));
+  CHECK(load_bvh(charfix::write_temp("swing5.bvh", procedural_swing_bvh(5))).clip.frames.size() == 5);
+  CHECK_THROWS(procedural_swing_bvh(0));
+  // The default map drives a humanoid with it.
+  const Character ch = procedural_character();
+  CHECK(retarget(m, ch.skeleton, mat4_identity()).frames.size() == 24);
 }
 
 TEST_CASE("random poses: deterministic per seed, within limits, roots at rest", "[character][pose]") {

@@ -12,6 +12,8 @@
 #include "gatcore/character/dataset.hpp"
 #include "gatcore/character/gltf.hpp"
 #include "gatcore/character/motion.hpp"
+#include "gatcore/character/procedural.hpp"
+#include "gatcore/character/weight_eval.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;
@@ -35,7 +37,42 @@ void usage(std::FILE* f) {
                "             seeded one: each entry names one character by the end of its path (e.g.\n"
                "             modular_men/Punk.glb); the rest train\n"
                "usage: gat dataset export-character CHARACTER -o OUT.glb\n"
-               "  writes a dataset character (e.g. procedural:humanoid:5) as a skinned glTF file\n");
+               "  writes a dataset character (e.g. procedural:humanoid:5) as a skinned glTF file\n"
+               "usage: gat dataset export-motion procedural:swing[:FRAMES] -o OUT.bvh\n"
+               "  writes the built-in procedural swing motion (CMU joint names, 30 fps, default 24 frames)\n");
+}
+
+// `gat dataset export-motion procedural:swing[:N] -o OUT.bvh`: a motion for
+// the examples and tests that needs no downloaded data.
+int export_motion(int argc, char** argv) {
+  std::string entry, out;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-o" && i + 1 < argc) out = argv[++i];
+    else if (!a.empty() && a[0] != '-' && entry.empty()) entry = a;
+    else throw gatcore::InvalidArgument("export-motion: unknown or extra argument '" + a + "'");
+  }
+  if (entry.empty() || out.empty()) {
+    usage(stderr);
+    return 2;
+  }
+  const std::string prefix = "procedural:swing";
+  if (entry.compare(0, prefix.size(), prefix) != 0 || (entry.size() > prefix.size() && entry[prefix.size()] != ':'))
+    throw gatcore::InvalidArgument("export-motion: unknown motion '" + entry + "' (expected procedural:swing[:FRAMES])");
+  int frames = 24;
+  if (entry.size() > prefix.size()) {
+    const std::string n = entry.substr(prefix.size() + 1);
+    char* end = nullptr;
+    const long v = std::strtol(n.c_str(), &end, 10);
+    if (n.empty() || *end || v < 1 || v > 100000)
+      throw gatcore::InvalidArgument("export-motion: frames must be an integer in [1, 100000], got '" + n + "'");
+    frames = static_cast<int>(v);
+  }
+  if (std::filesystem::path(out).extension().string() != ".bvh")
+    throw gatcore::InvalidArgument(out + ": the output must be a .bvh file");
+  write_text_atomic(out, procedural_swing_bvh(frames));
+  std::printf("%s: %d frames at 30 fps -> %s\n", entry.c_str(), frames, out.c_str());
+  return 0;
 }
 
 // `gat dataset export-character ENTRY -o OUT.glb`: procedural characters as
@@ -70,9 +107,10 @@ int cmd_dataset(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   if (std::string(argv[1]) == "export-character") return export_character(argc, argv);
+  if (std::string(argv[1]) == "export-motion") return export_motion(argc, argv);
   if (std::string(argv[1]) != "build")
     throw gatcore::InvalidArgument(std::string("unknown dataset action '") + argv[1] +
-                                   "' (expected build or export-character)");
+                                   "' (expected build, export-character or export-motion)");
   DatasetDescription s;
   std::string out;
   std::vector<std::string> inputs, motions;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
@@ -253,6 +255,86 @@ Character procedural_character(const ProceduralOptions& opt) {
   sk.validate(ch.name.c_str());
   ch.mesh.validate(sk.num_joints(), ch.name.c_str());
   return ch;
+}
+
+std::string procedural_swing_bvh(int frames) {
+  GATCORE_CHECK(frames >= 1 && frames <= 100000, "procedural_swing_bvh: frames must be in [1, 100000], got ", frames);
+  // Joint, parent depth layout and offsets of a compact CMU-named skeleton.
+  struct J {
+    const char* name;
+    int depth;
+    float x, y, z;
+    bool end;  // followed by an End Site at (ex, ey, ez)
+    float ex, ey, ez;
+  };
+  const J joints[] = {
+      {"LeftUpLeg", 1, 1.2f, -0.4f, 0, false, 0, 0, 0},  {"LeftLeg", 2, 0, -7, 0, false, 0, 0, 0},
+      {"LeftFoot", 3, 0, -7, 0, true, 0, -1, 2},          {"RightUpLeg", 1, -1.2f, -0.4f, 0, false, 0, 0, 0},
+      {"RightLeg", 2, 0, -7, 0, false, 0, 0, 0},          {"RightFoot", 3, 0, -7, 0, true, 0, -1, 2},
+      {"LowerBack", 1, 0, 1, 0, false, 0, 0, 0},          {"Spine", 2, 0, 2, 0, false, 0, 0, 0},
+      {"Spine1", 3, 0, 2, 0, false, 0, 0, 0},             {"Neck", 4, 0, 2, 0, false, 0, 0, 0},
+      {"Head", 5, 0, 1.5f, 0, true, 0, 2, 0},             {"LeftShoulder", 4, 0.5f, 1.6f, 0, false, 0, 0, 0},
+      {"LeftArm", 5, 1.5f, 0, 0, false, 0, 0, 0},         {"LeftForeArm", 6, 5, 0, 0, false, 0, 0, 0},
+      {"LeftHand", 7, 4.5f, 0, 0, true, 1.5f, 0, 0},      {"RightShoulder", 4, -0.5f, 1.6f, 0, false, 0, 0, 0},
+      {"RightArm", 5, -1.5f, 0, 0, false, 0, 0, 0},       {"RightForeArm", 6, -5, 0, 0, false, 0, 0, 0},
+      {"RightHand", 7, -4.5f, 0, 0, true, -1.5f, 0, 0},
+  };
+  constexpr int kJoints = sizeof(joints) / sizeof(joints[0]);
+  std::string out = "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n"
+                    "  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n";
+  auto indent = [](int d) { return std::string(2 * static_cast<std::size_t>(d), ' '); };
+  auto num = [](float v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", static_cast<double>(v));
+    return std::string(b);
+  };
+  int open = 1;  // braces open below ROOT
+  for (int j = 0; j < kJoints; ++j) {
+    const J& jt = joints[j];
+    while (open > jt.depth) out += indent(--open) + "}\n";
+    out += indent(open) + "JOINT " + jt.name + "\n" + indent(open) + "{\n";
+    out += indent(open + 1) + "OFFSET " + num(jt.x) + " " + num(jt.y) + " " + num(jt.z) + "\n";
+    out += indent(open + 1) + "CHANNELS 3 Zrotation Yrotation Xrotation\n";
+    ++open;
+    if (jt.end)
+      out += indent(open) + "End Site\n" + indent(open) + "{\n" + indent(open + 1) + "OFFSET " + num(jt.ex) + " " +
+             num(jt.ey) + " " + num(jt.ez) + "\n" + indent(open) + "}\n";
+  }
+  while (open > 0) out += indent(--open) + "}\n";
+  out += "MOTION\nFrames: " + std::to_string(frames) + "\nFrame Time: 0.0333333\n";
+  // Channel values per frame (degrees; Z Y X order per joint after the
+  // root's 6), as named columns.
+  const double kPi = 3.14159265358979323846;
+  std::vector<double> v(6 + 3 * kJoints);
+  auto set = [&](const char* joint, int axis /*0 Z, 1 Y, 2 X*/, double value) {
+    for (int j = 0; j < kJoints; ++j)
+      if (!std::strcmp(joints[j].name, joint)) v[static_cast<std::size_t>(6 + 3 * j + axis)] = value;
+  };
+  for (int f = 0; f < frames; ++f) {
+    std::fill(v.begin(), v.end(), 0.0);
+    const double s = std::sin(2.0 * kPi * f / 24.0);
+    v[1] = 15.5 + 0.3 * std::abs(s);  // hips bob twice per cycle
+    v[2] = 0.6 * f;                   // and move forward
+    set("LeftUpLeg", 2, 30 * s);
+    set("LeftLeg", 2, -35 * std::max(0.0, -s));  // knee bends on the back swing
+    set("RightUpLeg", 2, -30 * s);
+    set("RightLeg", 2, -35 * std::max(0.0, s));
+    set("Spine", 1, 8 * s);
+    set("Neck", 1, -6 * s);
+    set("LeftArm", 0, -60);  // arms lowered from the T-pose
+    set("LeftArm", 1, 25 * s);
+    set("LeftForeArm", 1, -40 - 20 * s);  // elbows bend about Y
+    set("RightArm", 0, 60);
+    set("RightArm", 1, -25 * s);
+    set("RightForeArm", 1, 40 - 20 * s);
+    for (std::size_t c = 0; c < v.size(); ++c) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%s%.4f", c ? " " : "", v[c]);
+      out += b;
+    }
+    out += "\n";
+  }
+  return out;
 }
 
 }  // namespace gatcore::character

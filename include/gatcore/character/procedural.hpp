@@ -6,6 +6,7 @@
 // parts, like modular game characters), garment shells (sleeves, a skirt or
 // loose trousers) as further disjoint components, and smooth weights that
 // blend between consecutive bones around each joint.
+#include <string>
 #include <cstdint>
 
 #include "gatcore/character/character.hpp"
@@ -27,5 +28,13 @@ struct ProceduralOptions {
 // platform: uniform draws come from std::mt19937's integers). Y up, facing +Z,
 // the bind pose is the rest pose, the lowest point is at y = 0.
 Character procedural_character(const ProceduralOptions& opt = {});
+
+// A small walk-in-place-and-forward motion as BVH text, on CMU joint names
+// (so the default CMU -> humanoid retarget map applies): `frames` frames at
+// 30 fps of one sinusoidal cycle per 24 frames — legs swinging with the
+// knees bending on the back swing, arms lowered and swinging, spine and neck
+// counter-rotating, hips bobbing and moving forward. Used by the README's
+// examples and the tests, so neither needs downloaded motion data.
+std::string procedural_swing_bvh(int frames = 24);
 
 }  // namespace gatcore::character
