@@ -183,7 +183,7 @@ TEST_CASE("datasets record the joint-limit table and sample within it", "[charac
   }
 }
 
-TEST_CASE("the humanoid table bends Quaternius knees backwards and elbows forwards", "[character][limits][data]") {
+TEST_CASE("the humanoid table bends Quaternius knees backwards and elbows forwards, and lowers the arms", "[character][limits][data]") {
   const auto dir = charfix::data_dir();
   const auto men = dir / "characters" / "quaternius" / "modular_men" / "Farmer.glb";
   const auto women = dir / "characters" / "quaternius" / "modular_women" / "Casual.glb";
@@ -238,6 +238,18 @@ TEST_CASE("the humanoid table bends Quaternius knees backwards and elbows forwar
       INFO(file << " side " << side << ": ankle moves " << knee_fwd << " forward, wrist " << elbow_fwd);
       CHECK(knee_fwd < 0.0f);
       CHECK(elbow_fwd > 0.0f);
+      // The T-pose's arms must be able to hang down (walking keeps them
+      // there): the upper arm's X lower limit points the elbow straight down.
+      const std::int32_t shoulder = s.find(std::string("UpperArm.") + side);
+      REQUIRE(shoulder >= 0);
+      std::vector<JointLimit> down(lim.size());
+      down[shoulder].lo[0] = down[shoulder].hi[0] = lim[shoulder].lo[0];
+      std::mt19937 rng(0);
+      const auto g = global_transforms(s, random_pose(s, pc.rest, down, rng));
+      const Vec3 a = mat4_translation(g[shoulder]), b = mat4_translation(g[elbow]);
+      const float arm = std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]));
+      INFO("upper arm at its X lower limit points along y " << (b[1] - a[1]) / arm);
+      CHECK((b[1] - a[1]) / arm < -0.95f);
     }
   }
 }

@@ -61,6 +61,30 @@ TEST_CASE("ReduceLROnPlateau: factor after patience bad epochs, floored at min l
   CHECK(lr == 5e-7f);
 }
 
+TEST_CASE("ReduceLROnPlateau with validation every few epochs compares validation losses only") {
+  ModelConfig c = ModelConfig::defaults("densegats", 9, 3);
+  c.modules = 1;
+  c.blocks = 1;
+  std::vector<Sample> train = {fixtures::wave_sample(8, 6, 0.f, false), fixtures::wave_sample(8, 6, 0.5f, false)};
+  std::vector<Sample> val = {fixtures::wave_sample(7, 6, 1.f, false)};
+  auto m = make_model(c, 3);
+  TrainOptions o = TrainOptions::defaults_for(c);
+  o.sample_vertices = 25;
+  o.batch_size = 2;
+  o.plateau_patience = 0;  // any epoch that is not an improvement lowers the lr
+  Trainer t(*m, o, Normaliser::fit(train, true));
+  t.run_epoch(train);  // no validation yet: the training loss is the metric
+  CHECK(t.plateau().has_best);
+  CHECK_FALSE(t.plateau().on_validation);
+  const EpochStats v = t.run_epoch(train, val);
+  CHECK(t.plateau().on_validation);
+  CHECK(t.plateau().best == float(v.val_loss));  // a fresh best, not compared with the training loss
+  const float lr = t.optimiser().lr();
+  for (int e = 0; e < 3; ++e) t.run_epoch(train);  // epochs without validation leave it alone
+  CHECK(t.optimiser().lr() == lr);
+  CHECK(t.plateau().best == float(v.val_loss));
+}
+
 TEST_CASE("batches: induced subgraphs stacked block-diagonally with per-character neighbour graphs") {
   Sample a = fixtures::wave_sample(6, 5, 0.f, true), b = fixtures::wave_sample(5, 4, 1.f, true);
   a.bone_mask = Tensor::from(1, 5, {1, 1, 1, 0, 1});

@@ -82,7 +82,8 @@ JointLimitTable JointLimitTable::default_humanoid() {
   // the twist about the bone; X is flexion / extension and Z abduction for
   // most joints. Hinges bend one way only, in the direction measured on the
   // Quaternius rigs (test_character_joint_limits checks that knee flexion
-  // moves the ankle backwards and elbow flexion the wrist forwards).
+  // moves the ankle backwards, elbow flexion the wrist forwards, and that
+  // the upper-arm range reaches arms-down).
   JointLimitTable t;
   t.name = "humanoid";
   t.fallback_degrees = deg(-10, 10, -10, 10, -10, 10);
@@ -96,7 +97,10 @@ JointLimitTable JointLimitTable::default_humanoid() {
   add("head", deg(-20, 25, -40, 40, -15, 15));
   add("shoulder.*", deg(-10, 10, -5, 5, -12, 12));
   add("clavicle.*", deg(-10, 10, -5, 5, -12, 12));
-  add("upperarm.*", deg(-45, 45, -40, 40, -50, 50));
+  // The Quaternius rest pose is a T-pose: upper-arm X lowers / raises the arm
+  // (-90 = hanging at the side, where walking and most animation keep it;
+  // both sides alike), Z swings it forwards / backwards.
+  add("upperarm.*", deg(-90, 30, -40, 40, -50, 50));
   // Elbows bend about local Z on these rigs, in mirrored directions (the
   // forearm swings forwards); forearm twist about Y.
   add("lowerarm.l", deg(-5, 5, -40, 40, -130, 0));
@@ -107,7 +111,9 @@ JointLimitTable JointLimitTable::default_humanoid() {
   add("middle*", deg(-10, 40, -3, 3, -5, 5));
   add("ring*", deg(-10, 40, -3, 3, -5, 5));
   add("pinky*", deg(-10, 40, -3, 3, -5, 5));
-  add("upperleg.*", deg(-40, 40, -20, 20, -25, 25));
+  // Hips: the men's rigs flex about Z (mirrored) and abduct about X, the
+  // women's the other way round, so both axes get the flexion range.
+  add("upperleg.*", deg(-45, 45, -20, 20, -45, 45));
   add("lowerleg.*", deg(0, 120, -5, 5, -3, 3));  // knees: +X moves the ankle backwards
   add("foot.*", deg(-25, 25, -10, 10, -10, 10));
   add("toe*", deg(-20, 30, -3, 3, -3, 3));

@@ -325,6 +325,7 @@ void save_checkpoint(const std::string& path, const Model& model, const Normalis
     f.metadata["plateau_best"] = float_str(t.plateau().best);
     f.metadata["plateau_has_best"] = t.plateau().has_best ? "1" : "0";
     f.metadata["plateau_bad_epochs"] = std::to_string(t.plateau().bad_epochs);
+    f.metadata["plateau_on_validation"] = t.plateau().on_validation ? "1" : "0";
   }
   write_checkpoint_file(path, f);
 }
@@ -401,6 +402,8 @@ void restore_training_state(const CheckpointFile& f, Trainer& t, const std::stri
     t.plateau().best = std::stof(meta("plateau_best"));
     t.plateau().has_best = meta("plateau_has_best") == "1";
     t.plateau().bad_epochs = std::stoi(meta("plateau_bad_epochs"));
+    // Absent in checkpoints written before the key existed.
+    t.plateau().on_validation = f.metadata.count("plateau_on_validation") && f.metadata.at("plateau_on_validation") == "1";
   } catch (const std::logic_error&) {
     fail(path, "corrupted training state in the metadata");
   }

@@ -269,7 +269,13 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
   if (!val.empty()) st.val_loss = evaluate(val);
   const float metric = float(st.val_loss >= 0 ? st.val_loss : st.train_loss);
   if (opt_.schedule == Schedule::plateau) {
-    adam_.set_lr(plateau_.step(metric, adam_.lr()));
+    if (st.val_loss >= 0 && !plateau_.on_validation) {
+      // The first validation: training losses are not comparable with it.
+      plateau_.on_validation = true;
+      plateau_.has_best = false;
+      plateau_.bad_epochs = 0;
+    }
+    if (st.val_loss >= 0 || !plateau_.on_validation) adam_.set_lr(plateau_.step(metric, adam_.lr()));
   } else if (opt_.step_every > 0 && epoch_ % opt_.step_every == 0) {
     adam_.set_lr(std::max(opt_.min_lr, adam_.lr() * opt_.step_gamma));
   }

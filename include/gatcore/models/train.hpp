@@ -47,11 +47,15 @@ struct TrainOptions {
 };
 
 // ReduceLROnPlateau (mode min, relative threshold 1e-4, like PyTorch's default).
+// Once it has seen a validation loss it steps only on validation losses:
+// epochs without validation (gat train --val-every K) leave it alone, so it
+// never compares a training loss with a validation best.
 struct PlateauScheduler {
   float factor = 0.75f, min_lr = 5e-7f;
   int patience = 8;
   float best = 0.f;
   bool has_best = false;
+  bool on_validation = false;  // the metric so far has been the validation loss
   int bad_epochs = 0;
   float step(float metric, float lr);  // returns the new lr
 };
