@@ -12,6 +12,10 @@
 # usage: examples/experiments/densegats.sh [--budget ci|full] [--out DIR] [--seed S]
 #   environment overrides (defaults per budget below):
 #     DG_MINUTES   training minutes per model (0: --epochs only)   DG_EPOCHS   epoch cap per model
+#     DG_MINUTES_<model>  (e.g. DG_MINUTES_densegats=40, '-' for '_'): that model's own budget
+#     DG_LONG_MINUTES  > 0: afterwards densegats is resumed for that many more minutes into
+#                  densegats-long.gcm and evaluated too (the equal-budget comparison stays intact);
+#                  DG_LONG_EPOCHS caps the extra epochs
 #     DG_POSES     random poses per training character per epoch   DG_SUBSAMPLE vertices per sample
 #     DG_STRIDE    evaluate every k-th motion frame                DG_MOTIONS  test BVHs (space separated)
 #     DG_MODELS    models to train                                 DG_THREADS  OpenMP threads
@@ -37,7 +41,7 @@ done
 case "$budget" in
   ci)   : "${DG_MINUTES:=0}" "${DG_EPOCHS:=1}" "${DG_POSES:=1}" "${DG_SUBSAMPLE:=200}" "${DG_STRIDE:=172}"
         : "${DG_MAPFRAMES:=1}" ;;
-  full) : "${DG_MINUTES:=9}" "${DG_EPOCHS:=100000}" "${DG_POSES:=4}" "${DG_SUBSAMPLE:=1000}" "${DG_STRIDE:=8}"
+  full) : "${DG_MINUTES:=9}" "${DG_EPOCHS:=100000}" "${DG_POSES:=16}" "${DG_SUBSAMPLE:=1000}" "${DG_STRIDE:=8}"
         : "${DG_MAPFRAMES:=2}" ;;
   *) echo "densegats.sh: --budget expects ci or full, got '$budget'" >&2; exit 2 ;;
 esac
@@ -70,12 +74,14 @@ run "$gat" dataset build --skip-bad -o "$out/dataset.json" "$men" "$women" \
 
 # 2. Training, one model after the other, each with the same budget.
 train_args=(--data "$out/dataset.json" --seed "$seed" --threads "$DG_THREADS" --epochs "$DG_EPOCHS")
-[ "$DG_MINUTES" != 0 ] && train_args+=(--minutes "$DG_MINUTES")
-declare -A wall
+declare -A wall minutes
 for m in $DG_MODELS; do
-  echo "== train $m"
+  own="DG_MINUTES_${m//-/_}"
+  minutes[$m]="${!own:-$DG_MINUTES}"
+  echo "== train $m (${minutes[$m]} min)"
   extra=()
-  [ "$m" = neuroskinning ] && extra=(--task displacement)
+  [ "${minutes[$m]}" != 0 ] && extra+=(--minutes "${minutes[$m]}")
+  [ "$m" = neuroskinning ] && extra+=(--task displacement)
   t0=$(date +%s)
   rm -f "$out/$m.gcm"
   run "$gat" train --model "$m" "${extra[@]}" "${train_args[@]}" --out "$out/$m.gcm" > "$out/train_$m.log" 2>&1 \
@@ -84,13 +90,29 @@ for m in $DG_MODELS; do
   tail -n 2 "$out/train_$m.log"
 done
 
+# 2b. The longer DenseGATs: the equal-budget model, resumed (deterministic).
+: "${DG_LONG_MINUTES:=0}"
+models_eval="$DG_MODELS"
+if [ "$DG_LONG_MINUTES" != 0 ] && [[ " $DG_MODELS " == *" densegats "* ]]; then
+  echo "== train densegats-long (+$DG_LONG_MINUTES min)"
+  cp "$out/densegats.gcm" "$out/densegats-long.gcm"
+  t0=$(date +%s)
+  run "$gat" train --resume "$out/densegats-long.gcm" --minutes "$DG_LONG_MINUTES" --epochs "$(( DG_EPOCHS + ${DG_LONG_EPOCHS:-100000} ))" \
+    --threads "$DG_THREADS" --out "$out/densegats-long.gcm" > "$out/train_densegats-long.log" 2>&1 \
+    || { cat "$out/train_densegats-long.log" >&2; exit 1; }
+  wall[densegats-long]=$(( $(date +%s) - t0 ))
+  minutes[densegats-long]="${minutes[densegats]}+$DG_LONG_MINUTES"
+  tail -n 2 "$out/train_densegats-long.log"
+  models_eval="$DG_MODELS densegats-long"
+fi
+
 # 3. Evaluation of every model and LBS / DQS on the test characters, every
 # DG_STRIDE-th frame of the test motions; error maps of DG_MAPFRAMES frames.
 echo "== evaluate"
 eval_args=(--data "$out/dataset.json" --stride "$DG_STRIDE" --json "$out/report.json" --markdown "$out/eval.md"
            --errormaps "$out/img" --errormap-frames "$DG_MAPFRAMES" --errormap-size 256)
 for mo in $DG_MOTIONS; do eval_args+=(--motion "$mo"); done
-for m in $DG_MODELS; do eval_args+=(--model "$m=$out/$m.gcm" --loss-curve "$m=$out/train_$m.log"); done
+for m in $models_eval; do eval_args+=(--model "$m=$out/$m.gcm" --loss-curve "$m=$out/train_$m.log"); done
 t0=$(date +%s)
 run "$gat" eval "${eval_args[@]}" | tee "$out/eval.log"
 eval_wall=$(( $(date +%s) - t0 ))
@@ -104,18 +126,18 @@ if command -v python3 > /dev/null; then python3 "$here/png_recompress.py" "$out"
   echo "# DenseGATs experiment ($budget budget, seed $seed)"
   echo
   echo "- dataset: $out/dataset.json ($(grep -o '[0-9]* characters (train [0-9]*, validation [0-9]*, test [0-9]*)' "$out/dataset.log"))"
-  echo "- training: ${DG_POSES} random poses per character per epoch, ${DG_SUBSAMPLE}-vertex windows, budget ${DG_MINUTES} min / ${DG_EPOCHS} epochs per model, ${DG_THREADS} threads, nice ${DG_NICE}"
+  echo "- training: ${DG_POSES} random poses per character per epoch, ${DG_SUBSAMPLE}-vertex windows, budget ${DG_MINUTES} min / ${DG_EPOCHS} epochs per model (unless listed below), ${DG_THREADS} threads, nice ${DG_NICE}"
   echo "- test motions: $DG_MOTIONS, every ${DG_STRIDE}th frame"
   echo "- machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load average at the end $(cut -d' ' -f1-3 /proc/loadavg)"
   echo
-  echo "| model | epochs | last train loss | last val loss | wall (s) |"
-  echo "|---|---:|---:|---:|---:|"
-  for m in $DG_MODELS; do
+  echo "| model | budget (min) | epochs | last train loss | last val loss | wall (s) |"
+  echo "|---|---:|---:|---:|---:|---:|"
+  for m in $models_eval; do
     last=$(grep '^epoch ' "$out/train_$m.log" | tail -n 1)
     ep=$(echo "$last" | sed -n 's/^epoch \([0-9]*\)\/.*/\1/p')
     tl=$(echo "$last" | sed -n 's/.*train loss \([0-9.e+-]*\).*/\1/p')
     vl=$(echo "$last" | sed -n 's/.*val loss \([0-9.e+-]*\).*/\1/p')
-    echo "| $m | $ep | $tl | $vl | ${wall[$m]} |"
+    echo "| $m | ${minutes[$m]} | $ep | $tl | $vl | ${wall[$m]} |"
   done
   echo
   echo "Evaluation wall time: ${eval_wall} s; total: $(( $(date +%s) - t_start )) s."
@@ -123,4 +145,5 @@ if command -v python3 > /dev/null; then python3 "$here/png_recompress.py" "$out"
   cat "$out/eval.md"
 } > "$out/report.md.tmp"
 mv "$out/report.md.tmp" "$out/report.md"
-echo "== report: $out/report.md  (model: $out/densegats.gcm)"
+model="$out/densegats.gcm"; [ -f "$out/densegats-long.gcm" ] && [ "$models_eval" != "$DG_MODELS" ] && model="$out/densegats-long.gcm"
+echo "== report: $out/report.md  (model: $model)"

@@ -247,10 +247,18 @@ int gat::eval_motion(int argc, char** argv) {
         std::vector<std::vector<float>> err(K, std::vector<float>(std::size_t(n)));
         std::vector<Tensor> preds;
         for (auto& m : models_) preds.push_back(predict(*m.l.model, s, m.l.norm));
+        // The target is in the root frame; the reference in the world's.
+        // (Model errors are differences of two root-frame offsets: the same
+        // length in either frame.)
+        std::vector<float> ref_world(std::size_t(3 * n));
+        for (std::int64_t v = 0; v < n; ++v) {
+          const Vec3 o = root_offset_to_world(raw, {raw.target.at(v, 0), raw.target.at(v, 1), raw.target.at(v, 2)});
+          for (int a = 0; a < 3; ++a) ref_world[std::size_t(3 * v + a)] = raw.lbs.at(v, a) + o[std::size_t(a)];
+        }
         for (std::int64_t v = 0; v < n; ++v) {
           double e[2] = {0, 0};
           for (int a = 0; a < 3; ++a) {
-            const double ref = double(raw.lbs.at(v, a)) + raw.target.at(v, a);
+            const double ref = ref_world[std::size_t(3 * v + a)];
             e[0] += double(raw.target.at(v, a)) * raw.target.at(v, a);
             e[1] += (dqs[std::size_t(3 * v + a)] - ref) * (dqs[std::size_t(3 * v + a)] - ref);
           }
@@ -272,7 +280,7 @@ int gat::eval_motion(int argc, char** argv) {
           std::vector<float> world(std::size_t(3 * n));
           for (std::int64_t v = 0; v < n; ++v)
             for (int a = 0; a < 3; ++a)
-              world[std::size_t(3 * v + a)] = float((raw.lbs.at(v, a) + raw.target.at(v, a)) * to_world);
+              world[std::size_t(3 * v + a)] = float(ref_world[std::size_t(3 * v + a)] * to_world);
           RenderOptions ro;
           ro.width = ro.height = int(map_size);
           // One colour scale for every method of this frame: the 99th

@@ -39,14 +39,17 @@ CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, c
   f.corrected.resize(f.lbs.size());
   // Normalised p' = (p - origin) * scale: back to world units.
   const float inv = 1.0f / pc.norm.scale;
-  for (std::int64_t v = 0; v < n; ++v)
+  for (std::int64_t v = 0; v < n; ++v) {
+    // The model predicts in the root frame (make_densegats_sample).
+    const Vec3 o = root_offset_to_world(ds, {y.at(v, 0), y.at(v, 1), y.at(v, 2)});
     for (int c = 0; c < 3; ++c) {
       const float l = ds.lbs.at(v, c) * inv + pc.norm.origin[c];
-      const float off = y.at(v, c) * inv;
+      const float off = o[std::size_t(c)] * inv;
       GATCORE_CHECK(std::isfinite(off), s.name, ": the model predicted a non-finite offset at vertex ", v);
       f.lbs[3 * v + c] = l;
       f.corrected[3 * v + c] = l + off;
     }
+  }
   f.ms_features = std::chrono::duration<double, std::milli>(t1 - t0).count();
   f.ms_inference = std::chrono::duration<double, std::milli>(t2 - t1).count();
   return f;

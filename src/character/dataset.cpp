@@ -54,20 +54,55 @@ std::vector<std::int32_t> vertex_range(std::int64_t n, std::int64_t first, std::
 
 }  // namespace
 
+std::int32_t root_motion_joint(const PreparedCharacter& pc) {
+  const Skeleton& sk = pc.character.skeleton;
+  std::int32_t j = pc.norm.origin_joint >= 0 && pc.norm.origin_joint < sk.num_joints() ? pc.norm.origin_joint : 0;
+  for (std::int32_t guard = 0; sk.parents[std::size_t(j)] >= 0 && guard < sk.num_joints(); ++guard)
+    j = sk.parents[std::size_t(j)];
+  return j;
+}
+
+Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& d) {
+  const Mat4& m = s.root_motion;
+  return {m[0] * d[0] + m[4] * d[1] + m[8] * d[2], m[1] * d[0] + m[5] * d[1] + m[9] * d[2],
+          m[2] * d[0] + m[6] * d[1] + m[10] * d[2]};
+}
+
 DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
                                       std::int64_t count) {
   const Character& ch = pc.character;
   const std::vector<Mat4> g = global_transforms(ch.skeleton, pose);
   std::vector<Mat4> S(g.size());
   for (std::size_t j = 0; j < g.size(); ++j) S[j] = mul(g[j], ch.skeleton.inverse_bind[j]);
-  const std::vector<float> lbs = apply_normalisation(pc.norm, linear_blend_skinning(ch.mesh, S));
-  const std::vector<float> mush = apply_normalisation(
-      pc.norm, delta_mush_apply(pc.delta_mush, linear_blend_skinning(ch.mesh, S)));
-  const std::vector<float> normals = vertex_normals(lbs, ch.mesh.triangles);
-  std::vector<Vec3> joints = joint_positions(g);
-  for (Vec3& j : joints) j = apply_normalisation(pc.norm, j);
+  const std::vector<float> lbs_world = linear_blend_skinning(ch.mesh, S);
+  const std::vector<float> mush_world = delta_mush_apply(pc.delta_mush, lbs_world);
+  const std::vector<float> lbs = apply_normalisation(pc.norm, lbs_world);
 
+  // The root frame: undo the root's motion (rigid; the root's rest placement
+  // is where training poses keep it).
   DenseGatsSample s;
+  const std::int32_t r = root_motion_joint(pc);
+  const std::vector<Mat4> g_rest = global_transforms(ch.skeleton, pc.rest);
+  s.root_motion = to_matrix(to_transform(mul(g[std::size_t(r)], inverse(g_rest[std::size_t(r)]))));
+  {
+    Transform t = to_transform(s.root_motion);
+    t.scale = {1.0f, 1.0f, 1.0f};  // rigid: offsets keep their length
+    s.root_motion = to_matrix(t);
+  }
+  const Mat4 to_root = inverse(s.root_motion);
+  auto in_root = [&](const std::vector<float>& w) {
+    std::vector<float> out(w.size());
+    for (std::size_t v = 0; v < w.size() / 3; ++v) {
+      const Vec3 q = transform_point(to_root, {w[3 * v], w[3 * v + 1], w[3 * v + 2]});
+      for (int c = 0; c < 3; ++c) out[3 * v + c] = q[std::size_t(c)];
+    }
+    return apply_normalisation(pc.norm, out);
+  };
+  const std::vector<float> lbs_root = in_root(lbs_world), mush_root = in_root(mush_world);
+  const std::vector<float> normals = vertex_normals(lbs_root, ch.mesh.triangles);
+  std::vector<Vec3> joints = joint_positions(g);
+  for (Vec3& j : joints) j = apply_normalisation(pc.norm, transform_point(to_root, j));
+
   s.vertices = vertex_range(ch.mesh.num_vertices(), first, count);
   const std::int64_t m = static_cast<std::int64_t>(s.vertices.size());
   std::vector<float> p(3 * m), n(3 * m);
@@ -76,10 +111,10 @@ DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& p
   for (std::int64_t i = 0; i < m; ++i)
     for (int c = 0; c < 3; ++c) {
       const std::int64_t v = s.vertices[i];
-      p[3 * i + c] = lbs[3 * v + c];
+      p[3 * i + c] = lbs_root[3 * v + c];
       n[3 * i + c] = normals[3 * v + c];
       s.lbs.at(i, c) = lbs[3 * v + c];
-      s.target.at(i, c) = mush[3 * v + c] - lbs[3 * v + c];
+      s.target.at(i, c) = mush_root[3 * v + c] - lbs_root[3 * v + c];
     }
   s.features = densegats_features(p, n, joints);
   s.graph = induced_subgraph(pc.mesh_graph, s.vertices);

@@ -38,10 +38,16 @@ struct PreparedCharacter {
 };
 PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {});
 
+// Features and targets are expressed in the character's root frame: the
+// skeleton root above the hips (the joint that carries root motion) is moved
+// back to its rest placement, so a character walking away or turning gives
+// the network the same inputs as one posed in place (random training poses
+// keep the root at rest). `root_motion` maps that frame back to the world.
 struct DenseGatsSample {
-  Tensor features;  // [m, 6 + J]: posed position, posed normal, distance to each joint (normalised)
-  Tensor target;    // [m, 3]: Delta Mush - LBS displacement (normalised units)
-  Tensor lbs;       // [m, 3]: LBS positions (normalised)
+  Tensor features;  // [m, 6 + J]: posed position, posed normal, distance to each joint (normalised, root frame)
+  Tensor target;    // [m, 3]: Delta Mush - LBS displacement (normalised units, root frame)
+  Tensor lbs;       // [m, 3]: LBS positions (normalised, world frame)
+  Mat4 root_motion = mat4_identity();  // the root's current world transform times its rest inverse
   CsrGraph graph;   // subgraph of the mesh graph induced by `vertices`
   std::vector<std::int32_t> vertices;
   std::int32_t character = -1, pose = -1;
@@ -52,6 +58,11 @@ struct DenseGatsSample {
 // on the whole mesh, then restricted.
 DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
                                       std::int64_t count);
+// A root-frame displacement (target or prediction) in the world frame (normalised units).
+Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& offset);
+// The joint that carries root motion: the topmost ancestor of the
+// normalisation's origin joint (the hips).
+std::int32_t root_motion_joint(const PreparedCharacter& pc);
 
 struct NeuroSkinningSample {
   Tensor features;  // [m, 6 + J]: rest position, rest normal, distance to each bone segment (normalised)
