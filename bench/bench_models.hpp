@@ -85,7 +85,7 @@ struct ModelCase {
   }
 
   float step() const {
-    gatcore::Var loss = gatcore::models::task_loss(model->config().task, model->forward(batch, true), batch.target);
+    gatcore::Var loss = gatcore::models::task_loss(model->config(), model->forward(batch, true), batch.target);
     adam->zero_grad();
     gatcore::backward(loss);
     adam->step();

@@ -62,6 +62,47 @@ TEST_CASE("DenseGATs samples: rest pose has no correction, a bent pose has one",
   CHECK_THROWS(make_densegats_sample(pc, p, n - 10, 500));
 }
 
+TEST_CASE("DenseGATs samples are in the root frame: root motion changes no feature and no target",
+          "[character][dataset]") {
+  ProceduralOptions o;
+  o.seed = 3;
+  const PreparedCharacter pc = prepare_character(procedural_character(o), DeltaMushParams{10, 0.5f});
+  const std::int32_t root = root_motion_joint(pc);
+  REQUIRE(pc.character.skeleton.parents[std::size_t(root)] < 0);
+  std::mt19937 rng(4);
+  const Pose p = random_pose(pc.character.skeleton, pc.rest, uniform_limits(pc.character.skeleton, 0.7f), rng);
+  // The same pose walked 2 units away and turned 70 degrees about the vertical.
+  Pose moved = p;
+  Transform& t = moved.local[std::size_t(root)];
+  const Quat turn = quat_from_axis_angle({0.0f, 1.0f, 0.0f}, 1.2217f);
+  t.rotation = quat_normalize(quat_mul(turn, t.rotation));
+  t.translation = quat_rotate(turn, t.translation);
+  t.translation[0] += 2.0f;
+  t.translation[2] -= 1.0f;
+  const DenseGatsSample a = make_densegats_sample(pc, p, 0, 0), b = make_densegats_sample(pc, moved, 0, 0);
+  REQUIRE(a.features.rows() == b.features.rows());
+  double df = 0.0, dt = 0.0, tmax = 0.0, dw = 0.0, lbs_moved = 0.0;
+  for (std::int64_t i = 0; i < a.features.rows(); ++i) {
+    for (std::int64_t c = 0; c < a.features.cols(); ++c)
+      df = std::max(df, double(std::abs(a.features.at(i, c) - b.features.at(i, c))));
+    for (int c = 0; c < 3; ++c) {
+      dt = std::max(dt, double(std::abs(a.target.at(i, c) - b.target.at(i, c))));
+      tmax = std::max(tmax, double(std::abs(a.target.at(i, c))));
+      lbs_moved = std::max(lbs_moved, double(std::abs(a.lbs.at(i, c) - b.lbs.at(i, c))));
+    }
+    // Back in the world: the moved sample's offset is the turned offset.
+    const Vec3 wa = quat_rotate(turn, root_offset_to_world(a, {a.target.at(i, 0), a.target.at(i, 1), a.target.at(i, 2)}));
+    const Vec3 wb = root_offset_to_world(b, {b.target.at(i, 0), b.target.at(i, 1), b.target.at(i, 2)});
+    for (int c = 0; c < 3; ++c) dw = std::max(dw, double(std::abs(wa[std::size_t(c)] - wb[std::size_t(c)])));
+  }
+  INFO("feature diff " << df << ", target diff " << dt << " (max target " << tmax << "), world diff " << dw);
+  CHECK(tmax > 1e-3);
+  CHECK(lbs_moved > 0.5);  // the world-frame LBS did move
+  CHECK(df < 1e-3);
+  CHECK(dt < 1e-3 * tmax + 1e-6);
+  CHECK(dw < 1e-3 * tmax + 1e-6);
+}
+
 TEST_CASE("NeuroSkinning samples hold normalised rest features and the weights", "[character][dataset]") {
   ProceduralOptions o;
   o.kind = ProceduralKind::creature;

@@ -4,9 +4,11 @@
 #include <catch2/catch.hpp>
 
 #include <chrono>
+#include <random>
 
 #include "gatcore/models/train.hpp"
 #include "model_fixtures.hpp"
+#include "gradcheck.hpp"
 
 using namespace gatcore;
 using namespace gatcore::models;
@@ -38,7 +40,7 @@ TEST_CASE("every model runs forward and backward at the papers' defaults") {
     Var y = m->forward(b, true);
     CHECK(y.rows() == 80 + 63);
     CHECK(y.cols() == cfg.out_dim);
-    Var loss = task_loss(cfg.task, y, b.target);
+    Var loss = task_loss(cfg, y, b.target);
     backward(loss);
     for (const auto& p : m->registry().params) {
       INFO("parameter " << p.name);
@@ -89,6 +91,32 @@ TEST_CASE("model configuration round-trips through text") {
   }
   CHECK_THROWS_WITH(ModelConfig::from_text("name = densegats\nwidth = 3\n"), Catch::Contains("line 2: unknown key 'width'"));
   CHECK_THROWS_WITH(ModelConfig::from_text("heads = many\n"), Catch::Contains("bad value 'many' for 'heads'"));
+}
+
+TEST_CASE("displacement losses: MSE by default (the paper), L1 on request, recorded in the configuration") {
+  ModelConfig c = ModelConfig::defaults("densegats", 9);
+  CHECK(c.loss == DisplacementLoss::mse);
+  // Configurations written before the key existed read as MSE.
+  CHECK(ModelConfig::from_text("name = densegats\nin_dim = 9\n").loss == DisplacementLoss::mse);
+  c.loss = DisplacementLoss::l1;
+  CHECK(ModelConfig::from_text(c.to_text()).loss == DisplacementLoss::l1);
+  CHECK_THROWS_WITH(ModelConfig::from_text("loss = huber\n"), Catch::Contains("bad value 'huber' for 'loss'"));
+  std::mt19937 rng(3);
+  const Tensor pred = gradcheck::random_tensor(7, 3, rng), target = gradcheck::random_tensor(7, 3, rng);
+  double l1 = 0, l2 = 0;
+  for (std::int64_t i = 0; i < 7; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double d = double(pred.at(i, j)) - target.at(i, j);
+      l1 += std::abs(d) / 21.0;
+      l2 += d * d / 21.0;
+    }
+  CHECK(task_loss(c, Var(pred), target).value().at(0, 0) == Approx(l1).epsilon(1e-5));
+  c.loss = DisplacementLoss::mse;
+  CHECK(task_loss(c, Var(pred), target).value().at(0, 0) == Approx(l2).epsilon(1e-5));
+  c.loss = DisplacementLoss::l1;
+  // Away from the kink at 0 the gradient is sign(d) / numel.
+  gradcheck::check("l1 loss", [&](const std::vector<Var>& v) { return task_loss(c, v[0], target); }, {pred});
+  CHECK_THROWS(task_loss(c, Var(pred), Tensor::zeros(7, 2)));
 }
 
 TEST_CASE("masked bones get exactly zero probability; top-k renormalises") {

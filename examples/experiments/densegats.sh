@@ -13,9 +13,10 @@
 #   environment overrides (defaults per budget below):
 #     DG_MINUTES   training minutes per model (0: --epochs only)   DG_EPOCHS   epoch cap per model
 #     DG_MINUTES_<model>  (e.g. DG_MINUTES_densegats=40, '-' for '_'): that model's own budget
-#     DG_LONG_MINUTES  > 0: afterwards densegats is resumed for that many more minutes into
-#                  densegats-long.gcm and evaluated too (the equal-budget comparison stays intact);
-#                  DG_LONG_EPOCHS caps the extra epochs
+#     DG_LONG_MINUTES  > 0: afterwards each of DG_LONG_MODELS (default densegats) is resumed for
+#                  that many more minutes into <label>-long.gcm and evaluated too (the equal-budget
+#                  comparison stays intact); DG_LONG_EPOCHS caps the extra epochs
+#     A DG_MODELS label ending in -l1 (densegats-l1) trains that model with gat train --loss l1.
 #     DG_POSES     random poses per training character per epoch   DG_SUBSAMPLE vertices per sample
 #     DG_STRIDE    evaluate every k-th motion frame                DG_MOTIONS  test BVHs (space separated)
 #     DG_MODELS    models to train                                 DG_THREADS  OpenMP threads
@@ -72,38 +73,46 @@ run "$gat" dataset build --skip-bad -o "$out/dataset.json" "$men" "$women" \
   --joint-limits humanoid --random-poses "$DG_POSES" --subsample "$DG_SUBSAMPLE" \
   --seed "$seed" --validation 0.14 --test 0.14 2>&1 | tee "$out/dataset.log"
 
-# 2. Training, one model after the other, each with the same budget.
+# 2. Training, one model after the other, each with the same budget. A label
+# ending in -l1 trains that model with the L1 loss (gat train --loss l1)
+# instead of the paper's MSE.
 train_args=(--data "$out/dataset.json" --seed "$seed" --threads "$DG_THREADS" --epochs "$DG_EPOCHS")
 declare -A wall minutes
 for m in $DG_MODELS; do
   own="DG_MINUTES_${m//-/_}"
   minutes[$m]="${!own:-$DG_MINUTES}"
   echo "== train $m (${minutes[$m]} min)"
+  model="${m%-l1}"
   extra=()
+  [ "$model" != "$m" ] && extra+=(--loss l1)
   [ "${minutes[$m]}" != 0 ] && extra+=(--minutes "${minutes[$m]}")
-  [ "$m" = neuroskinning ] && extra+=(--task displacement)
+  [ "$model" = neuroskinning ] && extra+=(--task displacement)
   t0=$(date +%s)
   rm -f "$out/$m.gcm"
-  run "$gat" train --model "$m" "${extra[@]}" "${train_args[@]}" --out "$out/$m.gcm" > "$out/train_$m.log" 2>&1 \
+  run "$gat" train --model "$model" "${extra[@]}" "${train_args[@]}" --out "$out/$m.gcm" > "$out/train_$m.log" 2>&1 \
     || { cat "$out/train_$m.log" >&2; exit 1; }
   wall[$m]=$(( $(date +%s) - t0 ))
   tail -n 2 "$out/train_$m.log"
 done
 
-# 2b. The longer DenseGATs: the equal-budget model, resumed (deterministic).
-: "${DG_LONG_MINUTES:=0}"
+# 2b. Longer runs (DG_LONG_MODELS, default densegats): the equal-budget
+# models resumed for DG_LONG_MINUTES more (deterministic), as <label>-long.
+: "${DG_LONG_MINUTES:=0}" "${DG_LONG_MODELS:=densegats}"
 models_eval="$DG_MODELS"
-if [ "$DG_LONG_MINUTES" != 0 ] && [[ " $DG_MODELS " == *" densegats "* ]]; then
-  echo "== train densegats-long (+$DG_LONG_MINUTES min)"
-  cp "$out/densegats.gcm" "$out/densegats-long.gcm"
-  t0=$(date +%s)
-  run "$gat" train --resume "$out/densegats-long.gcm" --minutes "$DG_LONG_MINUTES" --epochs "$(( DG_EPOCHS + ${DG_LONG_EPOCHS:-100000} ))" \
-    --threads "$DG_THREADS" --out "$out/densegats-long.gcm" > "$out/train_densegats-long.log" 2>&1 \
-    || { cat "$out/train_densegats-long.log" >&2; exit 1; }
-  wall[densegats-long]=$(( $(date +%s) - t0 ))
-  minutes[densegats-long]="${minutes[densegats]}+$DG_LONG_MINUTES"
-  tail -n 2 "$out/train_densegats-long.log"
-  models_eval="$DG_MODELS densegats-long"
+if [ "$DG_LONG_MINUTES" != 0 ]; then
+  for m in $DG_LONG_MODELS; do
+    [[ " $DG_MODELS " == *" $m "* ]] || { echo "densegats.sh: DG_LONG_MODELS: $m is not in DG_MODELS" >&2; exit 2; }
+    echo "== train $m-long (+$DG_LONG_MINUTES min)"
+    cp "$out/$m.gcm" "$out/$m-long.gcm"
+    t0=$(date +%s)
+    run "$gat" train --resume "$out/$m-long.gcm" --minutes "$DG_LONG_MINUTES" --epochs "$(( DG_EPOCHS + ${DG_LONG_EPOCHS:-100000} ))" \
+      --threads "$DG_THREADS" --out "$out/$m-long.gcm" > "$out/train_$m-long.log" 2>&1 \
+      || { cat "$out/train_$m-long.log" >&2; exit 1; }
+    wall[$m-long]=$(( $(date +%s) - t0 ))
+    minutes[$m-long]="${minutes[$m]}+$DG_LONG_MINUTES"
+    tail -n 2 "$out/train_$m-long.log"
+    models_eval="$models_eval $m-long"
+  done
 fi
 
 # 3. Evaluation of every model and LBS / DQS on the test characters, every
@@ -145,5 +154,4 @@ if command -v python3 > /dev/null; then python3 "$here/png_recompress.py" "$out"
   cat "$out/eval.md"
 } > "$out/report.md.tmp"
 mv "$out/report.md.tmp" "$out/report.md"
-model="$out/densegats.gcm"; [ -f "$out/densegats-long.gcm" ] && [ "$models_eval" != "$DG_MODELS" ] && model="$out/densegats-long.gcm"
-echo "== report: $out/report.md  (model: $model)"
+echo "== report: $out/report.md  (models: $out/*.gcm)"

@@ -45,13 +45,15 @@ int usage(int rc) {
                "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
                "                 [--device cpu|vulkan|auto] [--minutes M] [--loss-curve FILE.png]\n"
-               "                 [--val-every K] [--sample-vertices V]\n"
+               "                 [--val-every K] [--sample-vertices V] [--loss mse|l1]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
                "                 neuroskinning, neuroskinning-nopool, fc, pointnet; paper settings\n"
                "  --task T       weights or displacement (default: the model's paper task; e.g.\n"
                "                 --model neuroskinning --task displacement is DenseGATs' comparison)\n"
+               "  --loss L       displacement loss: mse (default, the paper) or l1 (mean absolute error:\n"
+               "                 keeps LBS where unsure; closer to the mean vertex error gat eval reports)\n"
                "  --out FILE     checkpoint path (default model.gcm)\n"
                "  --epochs N     epochs to train, in total when resuming (default 10)\n"
                "  --resume FILE  continue from a checkpoint written by gat train (model, data, seed\n"
@@ -100,7 +102,7 @@ std::string hms(double s) {
 }  // namespace
 
 int gat::cmd_train(int argc, char** argv) {
-  std::string model_name = "densegats", out = "model.gcm", resume, data, task, device = "cpu", curve;
+  std::string model_name = "densegats", out = "model.gcm", resume, data, task, device = "cpu", curve, loss;
   long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
   bool samples_set = false;
   float lr = 1e-3f;
@@ -126,6 +128,13 @@ int gat::cmd_train(int argc, char** argv) {
       task = argv[++i];
       if (task != "weights" && task != "displacement") {
         std::fprintf(stderr, "gat train: --task expects 'weights' or 'displacement', got '%s'\n", task.c_str());
+        return 2;
+      }
+    }
+    else if (!std::strcmp(a, "--loss") && v) {
+      loss = argv[++i];
+      if (loss != "mse" && loss != "l1") {
+        std::fprintf(stderr, "gat train: --loss expects 'mse' or 'l1', got '%s'\n", loss.c_str());
         return 2;
       }
     }
@@ -213,9 +222,22 @@ int gat::cmd_train(int argc, char** argv) {
     ModelConfig cfg = ModelConfig::defaults(model_name, in_dim);
     if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
     cfg.out_dim = cfg.task == Task::weights ? (td ? td->super.num_bones() : demo::kTubeBones) : 3;
+    if (!loss.empty()) {
+      if (cfg.task == Task::weights) {
+        std::fprintf(stderr, "gat train: --loss applies to displacement models; %s learns skin weights (KL)\n",
+                     cfg.name.c_str());
+        return 2;
+      }
+      cfg.loss = loss == "l1" ? DisplacementLoss::l1 : DisplacementLoss::mse;
+    }
     model = make_model(cfg, std::uint64_t(seed));
   }
   const ModelConfig& cfg = model->config();
+  if (!resume.empty() && !loss.empty() && loss != displacement_loss_name(cfg.loss)) {
+    std::fprintf(stderr, "gat train: %s was trained with the %s loss; a resumed run keeps it (drop --loss %s)\n",
+                 resume.c_str(), displacement_loss_name(cfg.loss), loss.c_str());
+    return 2;
+  }
   if (td) {
     GATCORE_CHECK(cfg.in_dim == td->feature_dim() && (cfg.task != Task::weights || cfg.out_dim == td->super.num_bones()),
                   "model '", resume, "' takes ", cfg.in_dim, " features / ", cfg.out_dim, " outputs; dataset ", data,
@@ -248,9 +270,12 @@ int gat::cmd_train(int argc, char** argv) {
 
   const std::string source = td ? "dataset " + data + " (" + std::to_string(td->super.num_bones()) + " bones)"
                                 : std::string("embedded tube data");
+  const std::string task_text = cfg.task == Task::weights
+                                    ? std::string("weights, KL loss")
+                                    : std::string("displacement, ") + displacement_loss_name(cfg.loss) + " loss";
   std::printf("gat train: %s (%s), %lld parameters, %s: %zu training / %zu validation samples, "
               "batch %d, %d threads, device %s\n",
-              cfg.name.c_str(), task_name(cfg.task), static_cast<long long>(model->registry().num_parameters()),
+              cfg.name.c_str(), task_text.c_str(), static_cast<long long>(model->registry().num_parameters()),
               source.c_str(), train.size(), val.size(), opt.batch_size, omp_get_max_threads(),
               dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu");
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},

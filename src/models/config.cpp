@@ -9,6 +9,7 @@
 namespace gatcore::models {
 
 const char* task_name(Task t) { return t == Task::weights ? "weights" : "displacement"; }
+const char* displacement_loss_name(DisplacementLoss l) { return l == DisplacementLoss::l1 ? "l1" : "mse"; }
 
 ModelConfig ModelConfig::defaults(const std::string& name, std::int64_t in_dim, std::int64_t out_dim) {
   ModelConfig c;
@@ -116,6 +117,12 @@ const std::vector<Field>& fields() {
        [](ModelConfig& c, const std::string& v) {
          if (v != "weights" && v != "displacement") return false;
          c.task = v == "weights" ? Task::weights : Task::displacement;
+         return true;
+       }},
+      {"loss", [](const ModelConfig& c) { return std::string(displacement_loss_name(c.loss)); },
+       [](ModelConfig& c, const std::string& v) {
+         if (v != "mse" && v != "l1") return false;
+         c.loss = v == "l1" ? DisplacementLoss::l1 : DisplacementLoss::mse;
          return true;
        }},
       int_field("in_dim", &ModelConfig::in_dim),

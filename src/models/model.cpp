@@ -69,8 +69,13 @@ Tensor top_k_renormalise(const Tensor& w, int k) {
   return out;
 }
 
-Var task_loss(Task t, const Var& pred, const Tensor& target) {
-  return t == Task::weights ? kl_div_loss(pred, target) : mse_loss(pred, target);
+Var task_loss(const ModelConfig& cfg, const Var& pred, const Tensor& target) {
+  if (cfg.task == Task::weights) return kl_div_loss(pred, target);
+  if (cfg.loss == DisplacementLoss::mse) return mse_loss(pred, target);
+  // |d| = relu(d) + relu(-d), from ops every backend has.
+  check_shape(target, pred.rows(), pred.cols(), "l1 loss target");
+  const Var d = sub(pred, Var(target));
+  return mean(add(activation(Activation::relu, d), activation(Activation::relu, scale(d, -1.0f))));
 }
 
 }  // namespace gatcore::models

@@ -252,7 +252,7 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
     }
     Batch batch = make_batch(smp, sel, norm_, pools);
     to_device(batch, model_.device());  // once per batch; nothing else crosses until the loss read
-    Var loss = task_loss(model_.config().task, model_.forward(batch, true), batch.target);
+    Var loss = task_loss(model_.config(), model_.forward(batch, true), batch.target);
     adam_.zero_grad();
     backward(loss);
     const double l = to(loss.value(), Device::cpu).at(0, 0);  // the step's one host read
@@ -290,7 +290,7 @@ double Trainer::evaluate(const std::vector<Sample>& samples) {
   for (const Sample& s : samples) {
     Batch b = make_batch({&s}, {{}}, norm_, model_.pool_sizes());
     to_device(b, model_.device());
-    sum += to(task_loss(model_.config().task, model_.forward(b, false), b.target).value(), Device::cpu).at(0, 0);
+    sum += to(task_loss(model_.config(), model_.forward(b, false), b.target).value(), Device::cpu).at(0, 0);
     forget_graphs(b, model_.device());
   }
   return samples.empty() ? 0.0 : sum / double(samples.size());

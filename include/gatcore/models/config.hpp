@@ -10,10 +10,17 @@ namespace gatcore::models {
 
 enum class Task { displacement, weights };  // MSE on [n,3] offsets / KL on [n,|B|] skin weights
 const char* task_name(Task t);
+// The displacement loss: MSE (the DenseGATs paper) or L1 (mean absolute
+// offset error: seeks the median, so where the network is unsure it keeps
+// the LBS result instead of adding the conditional mean; closer to the mean
+// per-vertex error the evaluation reports).
+enum class DisplacementLoss { mse, l1 };
+const char* displacement_loss_name(DisplacementLoss l);
 
 struct ModelConfig {
   std::string name = "densegats";
   Task task = Task::displacement;
+  DisplacementLoss loss = DisplacementLoss::mse;  // displacement task only (weights: KL)
   std::int64_t in_dim = 0;   // node feature width (required)
   std::int64_t out_dim = 3;  // 3 for displacements, |B| (super skeleton) for weights
   bool batch_norm = true;
