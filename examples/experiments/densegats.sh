@@ -13,7 +13,7 @@
 #   environment overrides (defaults per budget below):
 #     DG_MINUTES   training minutes per model (0: --epochs only)   DG_EPOCHS   epoch cap per model
 #     DG_MINUTES_<model>  (e.g. DG_MINUTES_densegats=40, '-' for '_'): that model's own budget
-#     DG_LONG_MINUTES  > 0: afterwards each of DG_LONG_MODELS (default densegats) is resumed for
+#     DG_LONG_MINUTES  > 0: afterwards each of DG_LONG_MODELS (default densegats densegats-l1) is resumed for
 #                  that many more minutes into <label>-long.gcm and evaluated too (the equal-budget
 #                  comparison stays intact); DG_LONG_EPOCHS caps the extra epochs
 #     A DG_MODELS label ending in -l1 (densegats-l1) trains that model with gat train --loss l1.
@@ -41,15 +41,15 @@ while [ $# -gt 0 ]; do
 done
 case "$budget" in
   ci)   : "${DG_MINUTES:=0}" "${DG_EPOCHS:=1}" "${DG_POSES:=1}" "${DG_SUBSAMPLE:=200}" "${DG_STRIDE:=172}"
-        : "${DG_MAPFRAMES:=1}" ;;
-  full) : "${DG_MINUTES:=9}" "${DG_EPOCHS:=100000}" "${DG_POSES:=16}" "${DG_SUBSAMPLE:=1000}" "${DG_STRIDE:=8}"
-        : "${DG_MAPFRAMES:=2}" ;;
+        : "${DG_MAPFRAMES:=1}" "${DG_LONG_MINUTES:=0}" ;;
+  full) : "${DG_MINUTES:=8}" "${DG_EPOCHS:=100000}" "${DG_POSES:=16}" "${DG_SUBSAMPLE:=1000}" "${DG_STRIDE:=8}"
+        : "${DG_MAPFRAMES:=2}" "${DG_LONG_MINUTES:=12}" ;;
   *) echo "densegats.sh: --budget expects ci or full, got '$budget'" >&2; exit 2 ;;
 esac
 data="${GATCORE_DATA:-$root/../shared/data}"
 out="${out:-$root/build/experiments/densegats-$budget}"
 gat="${GAT:-$root/build/examples/gat}"
-: "${DG_MODELS:=densegats densegats-noself densegats-nodense origat neuroskinning}"
+: "${DG_MODELS:=densegats densegats-l1 densegats-noself densegats-nodense origat neuroskinning}"
 : "${DG_MOTIONS:=$data/motion/cmu/walk.bvh}"
 : "${DG_THREADS:=2}" "${DG_NICE:=10}"
 men="$data/characters/quaternius/modular_men"
@@ -95,9 +95,12 @@ for m in $DG_MODELS; do
   tail -n 2 "$out/train_$m.log"
 done
 
-# 2b. Longer runs (DG_LONG_MODELS, default densegats): the equal-budget
+# 2b. Longer runs (DG_LONG_MODELS, default densegats and densegats-l1): the equal-budget
 # models resumed for DG_LONG_MINUTES more (deterministic), as <label>-long.
-: "${DG_LONG_MINUTES:=0}" "${DG_LONG_MODELS:=densegats}"
+if [ -z "${DG_LONG_MODELS+x}" ]; then  # default: the DenseGATs runs among DG_MODELS
+  DG_LONG_MODELS=""
+  for m in densegats densegats-l1; do [[ " $DG_MODELS " == *" $m "* ]] && DG_LONG_MODELS+=" $m"; done
+fi
 models_eval="$DG_MODELS"
 if [ "$DG_LONG_MINUTES" != 0 ]; then
   for m in $DG_LONG_MODELS; do
