@@ -83,12 +83,9 @@ DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& p
   DenseGatsSample s;
   const std::int32_t r = root_motion_joint(pc);
   const std::vector<Mat4> g_rest = global_transforms(ch.skeleton, pc.rest);
-  s.root_motion = to_matrix(to_transform(mul(g[std::size_t(r)], inverse(g_rest[std::size_t(r)]))));
-  {
-    Transform t = to_transform(s.root_motion);
-    t.scale = {1.0f, 1.0f, 1.0f};  // rigid: offsets keep their length
-    s.root_motion = to_matrix(t);
-  }
+  Transform motion = to_transform(mul(g[std::size_t(r)], inverse(g_rest[std::size_t(r)])));
+  motion.scale = {1.0f, 1.0f, 1.0f};  // rigid: offsets keep their length
+  s.root_motion = to_matrix(motion);
   const Mat4 to_root = inverse(s.root_motion);
   auto in_root = [&](const std::vector<float>& w) {
     std::vector<float> out(w.size());
