@@ -24,8 +24,8 @@ CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, c
                 model.config().name, " predicts skin weights, not displacements");
   const PreparedCharacter& pc = d.prepared;
   const auto t0 = std::chrono::steady_clock::now();
-  // The whole-mesh sample of training (its Delta Mush target is unused).
-  DenseGatsSample ds = make_densegats_sample(pc, pose, 0, 0);
+  // The whole-mesh sample of training, without its Delta Mush target.
+  DenseGatsSample ds = make_densegats_sample(pc, pose, 0, 0, /*with_target=*/false);
   models::Sample s;
   s.name = pc.character.name;
   s.features = features_in_bone_order(ds.features, d.mapping);

@@ -69,13 +69,12 @@ Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& d) {
 }
 
 DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
-                                      std::int64_t count) {
+                                      std::int64_t count, bool with_target) {
   const Character& ch = pc.character;
   const std::vector<Mat4> g = global_transforms(ch.skeleton, pose);
   std::vector<Mat4> S(g.size());
   for (std::size_t j = 0; j < g.size(); ++j) S[j] = mul(g[j], ch.skeleton.inverse_bind[j]);
   const std::vector<float> lbs_world = linear_blend_skinning(ch.mesh, S);
-  const std::vector<float> mush_world = delta_mush_apply(pc.delta_mush, lbs_world);
   const std::vector<float> lbs = apply_normalisation(pc.norm, lbs_world);
 
   // The root frame: undo the root's motion (rigid; the root's rest placement
@@ -95,7 +94,9 @@ DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& p
     }
     return apply_normalisation(pc.norm, out);
   };
-  const std::vector<float> lbs_root = in_root(lbs_world), mush_root = in_root(mush_world);
+  const std::vector<float> lbs_root = in_root(lbs_world);
+  const std::vector<float> mush_root =
+      with_target ? in_root(delta_mush_apply(pc.delta_mush, lbs_world)) : std::vector<float>{};
   const std::vector<float> normals = vertex_normals(lbs_root, ch.mesh.triangles);
   std::vector<Vec3> joints = joint_positions(g);
   for (Vec3& j : joints) j = apply_normalisation(pc.norm, transform_point(to_root, j));
@@ -103,7 +104,7 @@ DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& p
   s.vertices = vertex_range(ch.mesh.num_vertices(), first, count);
   const std::int64_t m = static_cast<std::int64_t>(s.vertices.size());
   std::vector<float> p(3 * m), n(3 * m);
-  s.target = Tensor::empty(m, 3);
+  if (with_target) s.target = Tensor::empty(m, 3);
   s.lbs = Tensor::empty(m, 3);
   for (std::int64_t i = 0; i < m; ++i)
     for (int c = 0; c < 3; ++c) {
@@ -111,7 +112,7 @@ DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& p
       p[3 * i + c] = lbs_root[3 * v + c];
       n[3 * i + c] = normals[3 * v + c];
       s.lbs.at(i, c) = lbs[3 * v + c];
-      s.target.at(i, c) = mush_root[3 * v + c] - lbs_root[3 * v + c];
+      if (with_target) s.target.at(i, c) = mush_root[3 * v + c] - lbs_root[3 * v + c];
     }
   s.features = densegats_features(p, n, joints);
   s.graph = induced_subgraph(pc.mesh_graph, s.vertices);

@@ -55,9 +55,10 @@ struct DenseGatsSample {
 
 // One pose of one character; `count` consecutive vertices from `first`
 // (count <= 0 or >= n: the whole mesh). Normals and Delta Mush are computed
-// on the whole mesh, then restricted.
+// on the whole mesh, then restricted. `with_target` false (inference) skips
+// Delta Mush and leaves `target` undefined.
 DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
-                                      std::int64_t count);
+                                      std::int64_t count, bool with_target = true);
 // A root-frame displacement (target or prediction) in the world frame (normalised units).
 Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& offset);
 // The joint that carries root motion: the topmost ancestor of the
