@@ -66,7 +66,7 @@ TEST_CASE("DenseGATs samples are in the root frame: root motion changes no featu
           "[character][dataset]") {
   ProceduralOptions o;
   o.seed = 3;
-  const PreparedCharacter pc = prepare_character(procedural_character(o), DeltaMushParams{10, 0.5f});
+  const PreparedCharacter pc = prepare_character(procedural_character(o), DeltaMushParams{10, 0.5f}, std::vector{1, 4});
   const std::int32_t root = root_motion_joint(pc);
   REQUIRE(pc.character.skeleton.parents[std::size_t(root)] < 0);
   std::mt19937 rng(4);
@@ -81,8 +81,13 @@ TEST_CASE("DenseGATs samples are in the root frame: root motion changes no featu
   t.translation[2] -= 1.0f;
   const DenseGatsSample a = make_densegats_sample(pc, p, 0, 0), b = make_densegats_sample(pc, moved, 0, 0);
   REQUIRE(a.features.rows() == b.features.rows());
-  double df = 0.0, dt = 0.0, tmax = 0.0, dw = 0.0, lbs_moved = 0.0;
+  REQUIRE(a.distortion.cols() == 6);
+  double df = 0.0, dt = 0.0, tmax = 0.0, dw = 0.0, lbs_moved = 0.0, dmax = 0.0;
   for (std::int64_t i = 0; i < a.features.rows(); ++i) {
+    for (std::int64_t c = 0; c < a.distortion.cols(); ++c) {
+      df = std::max(df, double(std::abs(a.distortion.at(i, c) - b.distortion.at(i, c))));
+      dmax = std::max(dmax, double(std::abs(a.distortion.at(i, c))));
+    }
     for (std::int64_t c = 0; c < a.features.cols(); ++c)
       df = std::max(df, double(std::abs(a.features.at(i, c) - b.features.at(i, c))));
     for (int c = 0; c < 3; ++c) {
@@ -97,10 +102,53 @@ TEST_CASE("DenseGATs samples are in the root frame: root motion changes no featu
   }
   INFO("feature diff " << df << ", target diff " << dt << " (max target " << tmax << "), world diff " << dw);
   CHECK(tmax > 1e-3);
+  CHECK(dmax > 1e-3);
   CHECK(lbs_moved > 0.5);  // the world-frame LBS did move
   CHECK(df < 1e-3);
   CHECK(dt < 1e-3 * tmax + 1e-6);
   CHECK(dw < 1e-3 * tmax + 1e-6);
+}
+
+TEST_CASE("DenseGATs distortion columns: zero at rest and under rigid motion, not where joints bend",
+          "[character][dataset]") {
+  ProceduralOptions o;
+  o.seed = 5;
+  const PreparedCharacter pc = prepare_character(procedural_character(o), DeltaMushParams{10, 0.5f}, std::vector{2, 8});
+  const std::int64_t n = pc.character.mesh.num_vertices();
+  const auto max_abs = [](const gatcore::Tensor& t) {
+    double m = 0.0;
+    for (std::int64_t i = 0; i < t.rows(); ++i)
+      for (std::int64_t c = 0; c < t.cols(); ++c) m = std::max(m, double(std::abs(t.at(i, c))));
+    return m;
+  };
+  const DenseGatsSample rest = make_densegats_sample(pc, pc.rest, 0, 0, false);
+  REQUIRE(rest.distortion.rows() == n);
+  REQUIRE(rest.distortion.cols() == 6);
+  CHECK(max_abs(rest.distortion) < 1e-5);
+  // The whole character moved and turned rigidly (a non-root joint's
+  // rotation would bend the skin; the root's does not).
+  Pose rigid = pc.rest;
+  const std::int32_t root = root_motion_joint(pc);
+  Transform& t = rigid.local[std::size_t(root)];
+  t.rotation = quat_normalize(quat_mul(quat_from_axis_angle({0.3f, 1.0f, 0.2f}, 0.9f), t.rotation));
+  t.translation[1] += 0.7f;
+  CHECK(max_abs(make_densegats_sample(pc, rigid, 0, 0, false).distortion) < 1e-5);
+  std::mt19937 rng(2);
+  const Pose bent = random_pose(pc.character.skeleton, pc.rest, uniform_limits(pc.character.skeleton, 0.8f), rng);
+  const DenseGatsSample s = make_densegats_sample(pc, bent, 100, 400, false);
+  REQUIRE(s.distortion.rows() == 400);
+  s.distortion.check_finite("distortion");
+  CHECK(max_abs(s.distortion) > 1e-3);
+  // A window holds the whole-mesh sample's rows.
+  const DenseGatsSample whole = make_densegats_sample(pc, bent, 0, 0, false);
+  for (std::int64_t i = 0; i < 400; ++i)
+    for (int c = 0; c < 6; ++c) CHECK(s.distortion.at(i, c) == whole.distortion.at(100 + i, c));
+  // No scales: no columns, and the model's features are the paper's.
+  const PreparedCharacter plain = prepare_character(procedural_character(o), DeltaMushParams{10, 0.5f});
+  const DenseGatsSample p = make_densegats_sample(plain, bent, 0, 0, false);
+  CHECK(!p.distortion.defined());
+  CHECK(densegats_model_features(p.features, p).cols() == p.features.cols());
+  CHECK(densegats_model_features(whole.features, whole).cols() == whole.features.cols() + 6);
 }
 
 TEST_CASE("NeuroSkinning samples hold normalised rest features and the weights", "[character][dataset]") {

@@ -8,6 +8,8 @@
 
 #include "character_fixtures.hpp"
 #include "gatcore/character/deform.hpp"
+#include "gatcore/character/detail_distortion.hpp"
+#include "gatcore/error.hpp"
 
 using namespace gatcore::character;
 
@@ -165,4 +167,75 @@ TEST_CASE("Delta Mush: rest pose is the rest mesh, rigid motions stay rigid, a b
   CHECK(std::abs(volume(mush, ch.mesh.triangles) - v0) < 0.1 * v0);
   CHECK_THROWS(delta_mush_bind(ch.mesh, DeltaMushParams{-1, 0.5f}));
   CHECK_THROWS(delta_mush_apply(dm, std::vector<float>(3)));
+}
+
+TEST_CASE("skin_vectors is LBS's blended linear part: LBS(p + d) - LBS(p)", "[character][deform]") {
+  const Character ch = charfix::tube_character();
+  Pose p = twist(ch.skeleton, 0.9f);
+  p.local[0].translation = {0.4f, -0.2f, 1.0f};  // translation must not reach the vectors
+  const auto S = skinning_matrices(ch.skeleton, p);
+  std::vector<float> d(ch.mesh.positions.size());
+  for (std::size_t i = 0; i < d.size(); ++i) d[i] = 0.01f * std::sin(0.37f * float(i));
+  Mesh moved = ch.mesh;
+  for (std::size_t i = 0; i < d.size(); ++i) moved.positions[i] += d[i];
+  const auto lbs = linear_blend_skinning(ch.mesh, S), lbs_moved = linear_blend_skinning(moved, S);
+  std::vector<float> expect(d.size());
+  for (std::size_t i = 0; i < d.size(); ++i) expect[i] = lbs_moved[i] - lbs[i];
+  CHECK(max_abs_diff(skin_vectors(ch.mesh, S, d), expect) < 1e-5f);
+  CHECK_THROWS_AS(skin_vectors(ch.mesh, S, std::vector<float>(6)), gatcore::InvalidArgument);
+}
+
+TEST_CASE("laplacian_details against a plain double-precision smoothing", "[character][deform]") {
+  const Character ch = charfix::tube_character(8, 10);
+  const DeltaMush dm = delta_mush_bind(ch.mesh, {0, 0.5f});
+  const std::vector<float>& x = ch.mesh.positions;
+  const std::size_t n = x.size() / 3;
+  std::vector<double> s(x.begin(), x.end());
+  std::vector<std::vector<double>> want;
+  for (int it = 1; it <= 5; ++it) {
+    std::vector<double> t = s;
+    for (std::size_t v = 0; v < n; ++v) {
+      const auto k0 = dm.adj_ptr[v], k1 = dm.adj_ptr[v + 1];
+      for (int c = 0; c < 3; ++c) {
+        double m = 0.0;
+        for (auto k = k0; k < k1; ++k) m += s[3 * std::size_t(dm.adj[std::size_t(k)]) + c];
+        t[3 * v + c] = s[3 * v + c] + 0.5 * (m / double(k1 - k0) - s[3 * v + c]);
+      }
+    }
+    s = t;
+    if (it == 2 || it == 5) {
+      std::vector<double> d(x.size());
+      for (std::size_t i = 0; i < d.size(); ++i) d[i] = x[i] - s[i];
+      want.push_back(d);
+    }
+  }
+  const auto got = laplacian_details(dm, x, std::vector{2, 5});
+  REQUIRE(got.size() == 2);
+  double worst = 0.0, size = 0.0;
+  for (std::size_t k = 0; k < 2; ++k)
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      worst = std::max(worst, std::abs(double(got[k][i]) - want[k][i]));
+      size = std::max(size, std::abs(want[k][i]));
+    }
+  CHECK(size > 1e-3);  // a tube's rings are curved: the details are not zero
+  CHECK(worst < 1e-5);
+  CHECK_THROWS_AS(laplacian_details(dm, x, std::vector{5, 2}), gatcore::InvalidArgument);
+  CHECK_THROWS_AS(laplacian_details(dm, x, std::vector{0}), gatcore::InvalidArgument);
+}
+
+TEST_CASE("distortion scales parse, format and name bad values", "[character][deform]") {
+  CHECK(parse_distortion_scales("1,4,16", "--x") == std::vector{1, 4, 16});
+  CHECK(parse_distortion_scales("none", "--x").empty());
+  CHECK(parse_distortion_scales("", "--x").empty());
+  CHECK(format_distortion_scales(std::vector{1, 4, 16}) == "1,4,16");
+  CHECK(format_distortion_scales(std::vector<int>{}).empty());
+  for (const char* bad : {"1,,4", "4,1", "0", "a", "1,", "2,2", "3x", "2000"}) {
+    INFO(bad);
+    try {
+      parse_distortion_scales(bad, "--distortion-scales");
+      FAIL("accepted");
+    } catch (const gatcore::InvalidArgument& e) {
+      CHECK(std::string(e.what()).find("--distortion-scales") != std::string::npos);
+    }
+  }
 }

@@ -22,8 +22,9 @@ std::string temp_dir() {
   return dir.string();
 }
 
-std::string write_small_dataset() {
+std::string write_small_dataset(std::vector<int> distortion_scales = {}) {
   DatasetDescription s;
+  s.distortion_scales = std::move(distortion_scales);
   s.random_poses = 2;
   s.subsample = 200;
   s.seed = 3;
@@ -47,7 +48,8 @@ TEST_CASE("displacement and skin-weight samples from a dataset") {
   REQUIRE(td.characters.size() == 4);
   const std::int32_t B = td.super.num_bones();
   CHECK(B > 0);
-  CHECK(td.feature_dim() == 6 + B);
+  CHECK(td.feature_dim(Task::displacement) == 6 + B);
+  CHECK(td.feature_dim(Task::weights) == 6 + B);
   CHECK(td.description.split.train.size() == 2);
 
   // Displacement: one sample per pose, windows of `subsample` vertices.
@@ -90,12 +92,37 @@ TEST_CASE("displacement and skin-weight samples from a dataset") {
   }
 }
 
+TEST_CASE("distortion scales add 3 displacement columns per scale, not weight columns") {
+  const std::string path = write_small_dataset({1, 4});
+  const TrainingData td = load_training_data(path);
+  CHECK(td.description.distortion_scales == std::vector<int>{1, 4});
+  const std::int32_t B = td.super.num_bones();
+  CHECK(td.feature_dim(Task::displacement) == 6 + B + 6);
+  CHECK(td.feature_dim(Task::weights) == 6 + B);
+  const auto disp = training_samples(td, Task::displacement, DatasetPart::train, 0);
+  REQUIRE(disp.size() == 4);
+  double distortion = 0;
+  for (const Sample& s : disp) {
+    REQUIRE(s.features.cols() == 6 + B + 6);
+    for (std::int64_t i = 0; i < s.features.rows(); ++i)
+      for (std::int64_t c = 6 + B; c < s.features.cols(); ++c) distortion += std::abs(s.features.at(i, c));
+  }
+  CHECK(distortion > 0);  // random poses bend joints
+  const auto w = training_samples(td, Task::weights, DatasetPart::train, 0, 4);
+  REQUIRE(!w.empty());
+  CHECK(w[0].features.cols() == 6 + B);
+  // The full-mesh sample of evaluation has the same columns.
+  const std::int32_t t0 = td.description.split.test[0];
+  CHECK(densegats_full_sample(td, t0, td.characters[std::size_t(t0)].rest).features.cols() == 6 + B + 6);
+}
+
 TEST_CASE("tiny models train on a dataset and checkpoints record it") {
-  const std::string path = write_small_dataset();
+  const std::string path = write_small_dataset({2, 8});
   const TrainingData td = load_training_data(path);
   for (const std::string name : {"densegats", "neuroskinning"}) {
     INFO("model " << name);
-    ModelConfig c = ModelConfig::defaults(name, td.feature_dim());
+    ModelConfig c = ModelConfig::defaults(name, 0);
+    c.in_dim = td.feature_dim(c.task);
     if (c.task == Task::weights) c.out_dim = td.super.num_bones();
     if (name == "densegats") {
       c.modules = 1;

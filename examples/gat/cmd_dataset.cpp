@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "gatcore/character/dataset.hpp"
+#include "gatcore/character/detail_distortion.hpp"
 #include "gatcore/character/gltf.hpp"
 #include "gatcore/character/motion.hpp"
 #include "gatcore/character/procedural.hpp"
@@ -30,6 +31,9 @@ void usage(std::FILE* f) {
                "  --random-poses N (32)  --pose-angle RAD (0.5)  --motion-stride K (4)  --seed S (0)\n"
                "  --subsample M (1000)   --validation F (0.1)    --test F (0.1)\n"
                "  --dm-iterations I (10) --dm-step S (0.5)       --skip-bad (skip unreadable characters)\n"
+               "  --distortion-scales K1,K2,... (1,4,16)  DenseGATs input columns: the skinning distortion of\n"
+               "             the mesh's detail coordinates at these smoothing scales (see\n"
+               "             include/gatcore/character/detail_distortion.hpp); 'none' = the paper's features only\n"
                "  --joint-limits FILE|humanoid  per-joint random-pose limits (JSON table, see\n"
                "             include/gatcore/character/joint_limits.hpp; 'humanoid' = the built-in table);\n"
                "             recorded in the dataset; without it every joint axis gets +-pose-angle\n"
@@ -112,6 +116,7 @@ int cmd_dataset(int argc, char** argv) {
     throw gatcore::InvalidArgument(std::string("unknown dataset action '") + argv[1] +
                                    "' (expected build, export-character or export-motion)");
   DatasetDescription s;
+  s.distortion_scales = {1, 4, 16};
   std::string out;
   std::vector<std::string> inputs, motions;
   bool skip_bad = false;
@@ -141,6 +146,7 @@ int cmd_dataset(int argc, char** argv) {
     else if (a == "--test") s.test = static_cast<float>(number(0, 0.9));
     else if (a == "--dm-iterations") s.delta_mush.iterations = static_cast<int>(number(0, 10000));
     else if (a == "--dm-step") s.delta_mush.step = static_cast<float>(number(1e-6, 1));
+    else if (a == "--distortion-scales") s.distortion_scales = parse_distortion_scales(value(), a);
     else if (a == "--skip-bad") skip_bad = true;
     else if (a == "--joint-limits") s.joint_limits = load_joint_limits(value());
     else if (a == "--test-characters") test_list = value();

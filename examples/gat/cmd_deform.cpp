@@ -105,7 +105,8 @@ int cmd_deform(int argc, char** argv) {
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::displacement);
   const Character ch = load_character(in);
   const Motion motion = load_bvh(motion_path);
-  const CorrectiveDeformer d = make_corrective_deformer(ch, bones, aliases);
+  const CorrectiveDeformer d =
+      make_corrective_deformer(ch, bones, aliases, checkpoint_distortion_scales(lm.file, model_path));
   const Clip clip = retarget(motion, d.prepared.character.skeleton, mat4_identity());
   const long nf = static_cast<long>(clip.frames.size());
   GATCORE_CHECK(nf > 0, motion_path, ": no frames");

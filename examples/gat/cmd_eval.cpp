@@ -118,9 +118,10 @@ int gat::cmd_eval(int argc, char** argv) {
                    bones.c_str(), md.at("skeleton").c_str());
       return 2;
     }
-    GATCORE_CHECK(cfg.in_dim == td.feature_dim() && (cfg.task != Task::weights || cfg.out_dim == td.super.num_bones()),
+    GATCORE_CHECK(cfg.in_dim == td.feature_dim(cfg.task) &&
+                      (cfg.task != Task::weights || cfg.out_dim == td.super.num_bones()),
                   "model '", path, "' takes ", cfg.in_dim, " features / ", cfg.out_dim, " outputs; dataset ", data,
-                  " has ", td.feature_dim(), " features over ", td.super.num_bones(), " bones");
+                  " has ", td.feature_dim(cfg.task), " features over ", td.super.num_bones(), " bones");
     const auto p = part == "test" ? character::DatasetPart::test
                    : part == "validation" ? character::DatasetPart::validation : character::DatasetPart::train;
     int k = 1;

@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "gatcore/character/bake.hpp"
 #include "gatcore/character/dataset.hpp"
+#include "gatcore/character/detail_distortion.hpp"
 #include "gatcore/character/import.hpp"
 #include "gatcore/character/loss_curve.hpp"
 #include "gatcore/character/motion.hpp"
@@ -100,6 +101,11 @@ void print_dataset(const std::string& path, const DatasetDescription& d) {
     std::printf("poses      %d random per character per epoch, +-%g rad per joint axis\n", d.random_poses, d.pose_angle);
   std::printf("reference  Delta Mush, %d iterations, step %g\n", d.delta_mush.iterations, d.delta_mush.step);
   std::printf("subsample  %lld consecutive vertices per sample\n", static_cast<long long>(d.subsample));
+  if (d.distortion_scales.empty())
+    std::printf("features   DenseGATs: the paper's (posed position, normal, joint distances)\n");
+  else
+    std::printf("features   DenseGATs: the paper's + detail distortion at smoothing scales %s\n",
+                format_distortion_scales(d.distortion_scales).c_str());
 }
 
 void print_point_cache(const std::string& path, const PointCache& pc) {

@@ -20,6 +20,7 @@
 #include <omp.h>
 
 #include "commands.hpp"
+#include "gatcore/character/detail_distortion.hpp"
 #include "gatcore/character/loss_curve.hpp"
 #include "gatcore/character/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
@@ -218,9 +219,9 @@ int gat::cmd_train(int argc, char** argv) {
     }
   }
   if (resume.empty()) {
-    const std::int64_t in_dim = td ? td->feature_dim() : demo::kTubeFeatures;
-    ModelConfig cfg = ModelConfig::defaults(model_name, in_dim);
+    ModelConfig cfg = ModelConfig::defaults(model_name, demo::kTubeFeatures);
     if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
+    if (td) cfg.in_dim = td->feature_dim(cfg.task);
     cfg.out_dim = cfg.task == Task::weights ? (td ? td->super.num_bones() : demo::kTubeBones) : 3;
     if (!loss.empty()) {
       if (cfg.task == Task::weights) {
@@ -239,9 +240,10 @@ int gat::cmd_train(int argc, char** argv) {
     return 2;
   }
   if (td) {
-    GATCORE_CHECK(cfg.in_dim == td->feature_dim() && (cfg.task != Task::weights || cfg.out_dim == td->super.num_bones()),
+    GATCORE_CHECK(cfg.in_dim == td->feature_dim(cfg.task) &&
+                      (cfg.task != Task::weights || cfg.out_dim == td->super.num_bones()),
                   "model '", resume, "' takes ", cfg.in_dim, " features / ", cfg.out_dim, " outputs; dataset ", data,
-                  " has ", td->feature_dim(), " features over ", td->super.num_bones(), " bones");
+                  " has ", td->feature_dim(cfg.task), " features over ", td->super.num_bones(), " bones");
   }
   int geodesic_k = 1;
   for (int k : model->pool_sizes()) geodesic_k = std::max(geodesic_k, k);
@@ -290,13 +292,16 @@ int gat::cmd_train(int argc, char** argv) {
     extra["data_path"] = std::filesystem::absolute(data).string();
     extra["data_hash"] = td->hash;
     extra["skeleton"] = character::joined_bone_names(td->super);
+    if (cfg.task == Task::displacement)
+      extra["distortion_scales"] = character::format_distortion_scales(td->description.distortion_scales);
     // For people reading the checkpoint: the feature layout ("features" above
     // is the key predict-weights / deform dispatch on); the columns follow "skeleton" (bone names normalised by
     // character::normalise_bone_name), the statistics are norm.mean / norm.inv_std.
     extra["feature_layout"] = cfg.task == Task::weights
                             ? "neuroskinning: rest position (3), rest normal (3), distance to each skeleton bone "
                               "segment; world frame, hips at the origin, height 1 (character::compute_normalisation)"
-                            : "densegats: posed position (3), posed normal (3), distance to each skeleton joint; "
+                            : "densegats: posed position (3), posed normal (3), distance to each skeleton joint, "
+                              "then 3 per distortion scale (character/detail_distortion.hpp); root frame, "
                               "normalised like neuroskinning";
   } else {
     extra["data"] = "embedded tube character";

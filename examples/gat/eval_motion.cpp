@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gatcore/character/deform.hpp"
+#include "gatcore/character/detail_distortion.hpp"
 #include "gatcore/character/render.hpp"
 #include "gatcore/character/training_data.hpp"
 #include "gatcore/error.hpp"
@@ -184,8 +185,9 @@ int gat::eval_motion(int argc, char** argv) {
     const ModelConfig& cfg = m.l.model->config();
     GATCORE_CHECK(cfg.task == Task::displacement, "gat eval: ", file, ": model '", cfg.name,
                   "' predicts skin weights; --motion evaluates displacement models");
-    GATCORE_CHECK(cfg.in_dim == td.feature_dim(), "gat eval: ", file, " takes ", cfg.in_dim, " features; ", data,
-                  " has ", td.feature_dim());
+    GATCORE_CHECK(cfg.in_dim == td.feature_dim(Task::displacement), "gat eval: ", file, " takes ", cfg.in_dim,
+                  " features; ", data, " has ", td.feature_dim(Task::displacement), " (distortion scales: ",
+                  format_distortion_scales(td.description.distortion_scales), ")");
     const auto& md = m.l.file.metadata;
     if (md.count("skeleton") && md.at("skeleton") != bones)
       throw InvalidArgument(detail::cat("gat eval: ", file, ": trained on a super skeleton (", md.at("skeleton"),

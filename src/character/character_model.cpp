@@ -3,6 +3,7 @@
 #include <map>
 #include <sstream>
 
+#include "gatcore/character/detail_distortion.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -22,6 +23,12 @@ FeatureKind checkpoint_features(const models::CheckpointFile& f) {
   }
   if (!md.count("data_path")) return FeatureKind::tube;
   return task() == models::Task::weights ? FeatureKind::neuroskinning : FeatureKind::densegats;
+}
+
+std::vector<int> checkpoint_distortion_scales(const models::CheckpointFile& f, const std::string& path) {
+  const auto it = f.metadata.find("distortion_scales");
+  if (it == f.metadata.end()) return {};
+  return parse_distortion_scales(it->second, path + ": metadata 'distortion_scales'");
 }
 
 const char* feature_kind_name(FeatureKind k) {
@@ -53,8 +60,9 @@ std::vector<std::string> character_model_bones(const models::LoadedModel& m, con
   std::stringstream ss(it->second);
   for (std::string b; std::getline(ss, b, ',');) bones.push_back(b);
   const auto B = static_cast<std::int64_t>(bones.size());
-  GATCORE_CHECK(cfg.in_dim == 6 + B, path, ": the model takes ", cfg.in_dim, " features but its skeleton has ", B,
-                " bones (expected 6 + ", B, ")");
+  const auto S = weights ? 0 : static_cast<std::int64_t>(checkpoint_distortion_scales(m.file, path).size());
+  GATCORE_CHECK(cfg.in_dim == 6 + B + 3 * S, path, ": the model takes ", cfg.in_dim, " features but its skeleton has ",
+                B, " bones and ", S, " distortion scales (expected 6 + ", B, " + 3 * ", S, ")");
   GATCORE_CHECK(!weights || cfg.out_dim == B, path, ": the model outputs ", cfg.out_dim, " bones but its skeleton has ",
                 B);
   return bones;

@@ -9,10 +9,10 @@
 namespace gatcore::character {
 
 CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
-                                            const BoneAliases& aliases) {
+                                            const BoneAliases& aliases, std::span<const int> distortion_scales) {
   CorrectiveDeformer d;
   // Only the mesh graph and normalisation are used: no Delta Mush binding.
-  d.prepared = prepare_character(ch, DeltaMushParams{0, 0.5f});
+  d.prepared = prepare_character(ch, DeltaMushParams{0, 0.5f}, distortion_scales);
   d.mapping = map_bones(ch.skeleton, bones, aliases, ch.name);
   d.num_bones = static_cast<std::int64_t>(bones.size());
   return d;
@@ -28,7 +28,9 @@ CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, c
   DenseGatsSample ds = make_densegats_sample(pc, pose, 0, 0, /*with_target=*/false);
   models::Sample s;
   s.name = pc.character.name;
-  s.features = features_in_bone_order(ds.features, d.mapping);
+  s.features = densegats_model_features(features_in_bone_order(ds.features, d.mapping), ds);
+  GATCORE_CHECK(s.features.cols() == model.config().in_dim, s.name, ": ", s.features.cols(),
+                " features (bones and distortion scales) for a model that takes ", model.config().in_dim);
   s.graph = share(std::move(ds.graph));
   const auto t1 = std::chrono::steady_clock::now();
   const Tensor y = models::predict(model, s, norm);

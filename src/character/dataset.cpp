@@ -8,6 +8,7 @@
 
 #include <tbb/parallel_pipeline.h>
 
+#include "gatcore/character/detail_distortion.hpp"
 #include "gatcore/character/motion.hpp"
 #include "gatcore/character/parallel.hpp"
 #include "gatcore/error.hpp"
@@ -26,7 +27,8 @@ Character to_world(const Character& ch, const Mat4& bind_to_world) {
   return w;
 }
 
-PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params) {
+PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params,
+                                    std::span<const int> distortion_scales) {
   const NormalisationStats n0 = compute_normalisation(ch);
   PreparedCharacter pc;
   pc.character = to_world(ch, n0.bind_to_world);
@@ -35,6 +37,8 @@ PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& 
   pc.delta_mush = delta_mush_bind(pc.character.mesh, params);
   pc.mesh_graph = graph_from_triangles(pc.character.mesh.num_vertices(), pc.character.mesh.triangles);
   pc.rest = bind_pose(pc.character.skeleton);
+  pc.distortion_scales.assign(distortion_scales.begin(), distortion_scales.end());
+  pc.rest_details = laplacian_details(pc.delta_mush, pc.character.mesh.positions, pc.distortion_scales);
   return pc;
 }
 
@@ -62,6 +66,20 @@ std::int32_t root_motion_joint(const PreparedCharacter& pc) {
   return j;
 }
 
+Tensor densegats_model_features(const Tensor& bone_features, const DenseGatsSample& s) {
+  const std::int64_t m = bone_features.rows(), k = s.distortion.defined() ? s.distortion.cols() : 0;
+  if (k == 0) return bone_features;
+  GATCORE_CHECK(s.distortion.rows() == m, "densegats_model_features: ", s.distortion.rows(), " distortion rows for ", m,
+                " vertices");
+  const std::int64_t f = bone_features.cols();
+  Tensor out = Tensor::empty(m, f + k);
+  for (std::int64_t i = 0; i < m; ++i) {
+    for (std::int64_t c = 0; c < f; ++c) out.at(i, c) = bone_features.at(i, c);
+    for (std::int64_t c = 0; c < k; ++c) out.at(i, f + c) = s.distortion.at(i, c);
+  }
+  return out;
+}
+
 Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& d) {
   const Mat4& m = s.root_motion;
   return {m[0] * d[0] + m[4] * d[1] + m[8] * d[2], m[1] * d[0] + m[5] * d[1] + m[9] * d[2],
@@ -72,9 +90,9 @@ DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& p
                                       std::int64_t count, bool with_target) {
   const Character& ch = pc.character;
   const std::vector<Mat4> g = global_transforms(ch.skeleton, pose);
-  std::vector<Mat4> S(g.size());
-  for (std::size_t j = 0; j < g.size(); ++j) S[j] = mul(g[j], ch.skeleton.inverse_bind[j]);
-  const std::vector<float> lbs_world = linear_blend_skinning(ch.mesh, S);
+  std::vector<Mat4> skin(g.size());
+  for (std::size_t j = 0; j < g.size(); ++j) skin[j] = mul(g[j], ch.skeleton.inverse_bind[j]);
+  const std::vector<float> lbs_world = linear_blend_skinning(ch.mesh, skin);
   const std::vector<float> lbs = apply_normalisation(pc.norm, lbs_world);
 
   // The root frame: undo the root's motion (rigid; the root's rest placement
@@ -115,6 +133,24 @@ DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& p
       if (with_target) s.target.at(i, c) = mush_root[3 * v + c] - lbs_root[3 * v + c];
     }
   s.features = densegats_features(p, n, joints);
+  if (!pc.distortion_scales.empty()) {
+    // Root frame, normalised: the root motion is rigid and normalisation a
+    // uniform scale, so vectors turn by to_root's rotation and scale by norm.scale.
+    const std::vector<std::vector<float>> posed = laplacian_details(pc.delta_mush, lbs_root, pc.distortion_scales);
+    const std::int64_t S = static_cast<std::int64_t>(posed.size());
+    s.distortion = Tensor::empty(m, 3 * S);
+    for (std::int64_t k = 0; k < S; ++k) {
+      const std::vector<float> skinned = skin_vectors(ch.mesh, skin, pc.rest_details[std::size_t(k)]);
+      for (std::int64_t i = 0; i < m; ++i) {
+        const std::int64_t v = s.vertices[i];
+        const float* a = &skinned[3 * v];
+        for (int c = 0; c < 3; ++c) {
+          const float r = (to_root[c] * a[0] + to_root[4 + c] * a[1] + to_root[8 + c] * a[2]) * pc.norm.scale;
+          s.distortion.at(i, 3 * k + c) = r - posed[std::size_t(k)][3 * v + c];
+        }
+      }
+    }
+  }
   s.graph = induced_subgraph(pc.mesh_graph, s.vertices);
   return s;
 }

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gatcore/character/dataset.hpp"
+#include "gatcore/character/detail_distortion.hpp"
 #include "gatcore/character/import.hpp"
 #include "gatcore/character/motion.hpp"
 #include "gatcore/character/procedural.hpp"
@@ -62,6 +63,7 @@ void save_dataset(const std::string& path, const DatasetDescription& d) {
   j["seed"] = d.seed;
   j["reference_deformer"] = {{"name", "delta_mush"}, {"iterations", d.delta_mush.iterations}, {"step", d.delta_mush.step}};
   j["subsample"] = d.subsample;
+  j["distortion_scales"] = d.distortion_scales;
   j["validation"] = d.validation;
   j["test"] = d.test;
   j["split"] = {{"train", d.split.train}, {"validation", d.split.validation}, {"test", d.split.test}};
@@ -106,6 +108,11 @@ DatasetDescription load_dataset(const std::string& path) {
     d.delta_mush.iterations = rd.at("iterations").get<int>();
     d.delta_mush.step = rd.at("step").get<float>();
     d.subsample = j.at("subsample").get<std::int64_t>();
+    // Absent in datasets written before the field: the paper's features only.
+    if (j.contains("distortion_scales")) {
+      d.distortion_scales = j.at("distortion_scales").get<std::vector<int>>();
+      check_distortion_scales(d.distortion_scales, path + ": field \"distortion_scales\"");
+    }
     d.validation = j.at("validation").get<float>();
     d.test = j.at("test").get<float>();
     d.split.train = j.at("split").at("train").get<std::vector<std::int32_t>>();

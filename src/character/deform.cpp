@@ -61,6 +61,27 @@ std::vector<float> linear_blend_skinning(const Mesh& mesh, std::span<const Mat4>
   return out;
 }
 
+std::vector<float> skin_vectors(const Mesh& mesh, std::span<const Mat4> skinning, std::span<const float> vectors) {
+  check_skinning(mesh, skinning);
+  const std::int64_t n = mesh.num_vertices();
+  GATCORE_CHECK(static_cast<std::int64_t>(vectors.size()) == 3 * n, "skin_vectors: ", vectors.size() / 3,
+                " vectors for ", n, " vertices");
+  std::vector<float> out(static_cast<std::size_t>(3 * n));
+  const auto& W = mesh.weights;
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
+  for (std::int64_t v = 0; v < n; ++v) {
+    float m[9] = {};
+    for (std::int64_t k = W.ptr[v]; k < W.ptr[v + 1]; ++k) {
+      const Mat4& s = skinning[W.joint[k]];
+      const float w = W.weight[k];
+      for (int c = 0; c < 9; ++c) m[c] += w * s[(c / 3) * 4 + c % 3];  // columns 0..2, rows 0..2
+    }
+    const float x = vectors[3 * v], y = vectors[3 * v + 1], z = vectors[3 * v + 2];
+    for (int r = 0; r < 3; ++r) out[3 * v + r] = m[r] * x + m[3 + r] * y + m[6 + r] * z;
+  }
+  return out;
+}
+
 std::vector<float> dual_quaternion_skinning(const Mesh& mesh, std::span<const Mat4> skinning) {
   check_skinning(mesh, skinning);
   std::vector<DualQuat> dq(skinning.size());
@@ -134,13 +155,13 @@ std::vector<float> vertex_normals(std::span<const float> positions, std::span<co
   return out;
 }
 
-namespace {
-
-std::vector<float> smooth(const DeltaMush& dm, std::span<const float> x0) {
+std::vector<float> laplacian_smooth(const DeltaMush& dm, std::span<const float> x0, int iterations, float step) {
+  const std::int64_t n = static_cast<std::int64_t>(dm.adj_ptr.size()) - 1;
+  GATCORE_CHECK(static_cast<std::int64_t>(x0.size()) == 3 * n, "laplacian_smooth: ", x0.size() / 3,
+                " vertices, the adjacency has ", n);
+  GATCORE_CHECK(iterations >= 0, "laplacian_smooth: iterations must be >= 0, got ", iterations);
   std::vector<float> a(x0.begin(), x0.end()), b(a.size());
-  const std::int64_t n = static_cast<std::int64_t>(a.size() / 3);
-  const float s = dm.params.step;
-  for (int it = 0; it < dm.params.iterations; ++it) {
+  for (int it = 0; it < iterations; ++it) {
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
     for (std::int64_t v = 0; v < n; ++v) {
       const std::int64_t k0 = dm.adj_ptr[v], k1 = dm.adj_ptr[v + 1];
@@ -152,11 +173,17 @@ std::vector<float> smooth(const DeltaMush& dm, std::span<const float> x0) {
       for (std::int64_t k = k0; k < k1; ++k)
         for (int c = 0; c < 3; ++c) m[c] += a[3 * dm.adj[k] + c];
       const float inv = 1.0f / static_cast<float>(k1 - k0);
-      for (int c = 0; c < 3; ++c) b[3 * v + c] = a[3 * v + c] + s * (m[c] * inv - a[3 * v + c]);
+      for (int c = 0; c < 3; ++c) b[3 * v + c] = a[3 * v + c] + step * (m[c] * inv - a[3 * v + c]);
     }
     a.swap(b);
   }
   return a;
+}
+
+namespace {
+
+std::vector<float> smooth(const DeltaMush& dm, std::span<const float> x0) {
+  return laplacian_smooth(dm, x0, dm.params.iterations, dm.params.step);
 }
 
 // Orthonormal frame (tangent, bitangent, normal) of vertex v on a smoothed

@@ -27,6 +27,11 @@ const std::vector<std::int32_t>& TrainingData::part(DatasetPart p) const {
   }
 }
 
+std::int64_t TrainingData::feature_dim(models::Task task) const {
+  const auto S = static_cast<std::int64_t>(description.distortion_scales.size());
+  return 6 + super.num_bones() + (task == models::Task::displacement ? 3 * S : 0);
+}
+
 std::string file_hash(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   GATCORE_CHECK(f.good(), path, ": cannot open file");
@@ -49,7 +54,7 @@ TrainingData load_training_data(const std::string& path) {
   GATCORE_CHECK(!d.characters.empty(), path, ": the dataset has no characters");
   for (const std::string& e : d.characters) {
     try {
-      t.characters.push_back(prepare_character(load_dataset_character(e), d.delta_mush));
+      t.characters.push_back(prepare_character(load_dataset_character(e), d.delta_mush, d.distortion_scales));
     } catch (const std::exception& ex) {
       throw InvalidArgument(detail::cat(path, ": character '", e, "': ", ex.what()));
     }
@@ -100,7 +105,8 @@ std::vector<models::Sample> training_samples(const TrainingData& data, models::T
     stream_densegats_samples(data.characters, tasks, [&](DenseGatsSample&& s) {
       models::Sample m;
       m.name = data.description.characters[std::size_t(s.character)] + " pose " + std::to_string(s.pose);
-      m.features = to_super_columns(s.features, data.super.joint_to_bone[std::size_t(s.character)], B);
+      m.features = densegats_model_features(
+          to_super_columns(s.features, data.super.joint_to_bone[std::size_t(s.character)], B), s);
       m.target = std::move(s.target);
       m.graph = share(std::move(s.graph));
       out.push_back(std::move(m));
@@ -135,7 +141,8 @@ models::Sample densegats_full_sample(const TrainingData& data, std::int32_t char
   DenseGatsSample s = make_densegats_sample(data.characters[std::size_t(character)], pose, 0, 0);
   models::Sample m;
   m.name = data.description.characters[std::size_t(character)];
-  m.features = to_super_columns(s.features, data.super.joint_to_bone[std::size_t(character)], data.super.num_bones());
+  m.features = densegats_model_features(
+      to_super_columns(s.features, data.super.joint_to_bone[std::size_t(character)], data.super.num_bones()), s);
   m.target = s.target;
   m.graph = share(std::move(s.graph));
   if (raw) *raw = std::move(s);

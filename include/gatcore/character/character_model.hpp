@@ -20,10 +20,14 @@ namespace gatcore::character {
 enum class FeatureKind { tube, neuroskinning, densegats };
 FeatureKind checkpoint_features(const models::CheckpointFile& f);
 const char* feature_kind_name(FeatureKind k);
+// The DenseGATs detail-distortion scales a checkpoint was trained with
+// (metadata "distortion_scales"; absent: none, the paper's features).
+std::vector<int> checkpoint_distortion_scales(const models::CheckpointFile& f, const std::string& path);
 
 // Checks that the checkpoint `path` holds a model of `task` trained on
 // character features (not the embedded tube) and returns its bones (metadata
-// "skeleton"), consistent with the model's input width (6 + |B|) and, for
+// "skeleton"), consistent with the model's input width (6 + |B|, plus 3 per
+// distortion scale for displacements) and, for
 // skin weights, its output width (|B|). Throws InvalidArgument naming the
 // file and what does not fit (e.g. a DenseGATs checkpoint given for weights).
 std::vector<std::string> character_model_bones(const models::LoadedModel& m, const std::string& path,

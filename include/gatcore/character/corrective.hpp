@@ -2,6 +2,7 @@
 // DenseGATs at playback: a character posed frame by frame, each frame linear
 // blend skinned and corrected by a trained displacement model (densegats, its
 // ablations, origat), with the features computed exactly as in training.
+#include <span>
 #include <string>
 #include <vector>
 
@@ -17,8 +18,9 @@ struct CorrectiveDeformer {
   BoneMapping mapping;         // joints -> the model's bones
   std::int64_t num_bones = 0;
 };
+// `distortion_scales`: those the model was trained with (checkpoint_distortion_scales).
 CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
-                                            const BoneAliases& aliases = {});
+                                            const BoneAliases& aliases = {}, std::span<const int> distortion_scales = {});
 
 struct CorrectedFrame {
   std::vector<float> lbs;        // [3 n] LBS positions, glTF world frame (welded vertices)

@@ -35,8 +35,13 @@ struct PreparedCharacter {
   DeltaMush delta_mush;
   CsrGraph mesh_graph;  // mesh edges + self-loops
   Pose rest;            // bind pose of the world-frame character
+  // DenseGATs' detail-distortion columns (detail_distortion.hpp): the
+  // smoothing scales and the world-frame rest details, one per scale.
+  std::vector<int> distortion_scales;
+  std::vector<std::vector<float>> rest_details;
 };
-PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {});
+PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {},
+                                    std::span<const int> distortion_scales = {});
 
 // Features and targets are expressed in the character's root frame: the
 // skeleton root above the hips (the joint that carries root motion) is moved
@@ -45,6 +50,7 @@ PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& 
 // keep the root at rest). `root_motion` maps that frame back to the world.
 struct DenseGatsSample {
   Tensor features;  // [m, 6 + J]: posed position, posed normal, distance to each joint (normalised, root frame)
+  Tensor distortion;  // [m, 3 S]: detail distortion at the character's S scales (normalised, root frame); S = 0: empty
   Tensor target;    // [m, 3]: Delta Mush - LBS displacement (normalised units, root frame)
   Tensor lbs;       // [m, 3]: LBS positions (normalised, world frame)
   Mat4 root_motion = mat4_identity();  // the root's current world transform times its rest inverse
@@ -59,6 +65,9 @@ struct DenseGatsSample {
 // Delta Mush and leaves `target` undefined.
 DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
                                       std::int64_t count, bool with_target = true);
+// The model's input: `bone_features` ([m, 6 + B], the sample's features in
+// the model's bone columns) followed by the sample's distortion columns.
+Tensor densegats_model_features(const Tensor& bone_features, const DenseGatsSample& s);
 // A root-frame displacement (target or prediction) in the world frame (normalised units).
 Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& offset);
 // The joint that carries root motion: the topmost ancestor of the
@@ -111,6 +120,7 @@ struct DatasetDescription {
   std::uint32_t seed = 0;
   DeltaMushParams delta_mush;           // the reference deformer's parameters
   std::int64_t subsample = 1000;        // DenseGATs: consecutive vertices per sample (<= 0: whole mesh)
+  std::vector<int> distortion_scales;   // DenseGATs: detail-distortion columns (empty: the paper's features only)
   float validation = 0.1f, test = 0.1f;
   Split split;                          // by character, from seed
 };

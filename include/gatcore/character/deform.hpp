@@ -15,6 +15,9 @@ namespace gatcore::character {
 
 // v' = sum_j w_j M_j v  with M_j = skinning_matrices(...)[j].
 std::vector<float> linear_blend_skinning(const Mesh& mesh, std::span<const Mat4> skinning);
+// Vectors attached to the vertices ([3 * n]) carried by LBS's blended linear
+// parts: d' = (sum_j w_j A_j) d, A_j the 3x3 of M_j (no translation).
+std::vector<float> skin_vectors(const Mesh& mesh, std::span<const Mat4> skinning, std::span<const float> vectors);
 // Blends the rigid parts of M_j as dual quaternions (antipodality resolved
 // against the vertex's strongest influence). Scale in M_j is ignored.
 std::vector<float> dual_quaternion_skinning(const Mesh& mesh, std::span<const Mat4> skinning);
@@ -38,6 +41,10 @@ struct DeltaMush {
   std::vector<std::int32_t> triangles;  // for the smoothed meshes' normals
   std::vector<float> deltas;           // [3 * n] in the smoothed-frame basis
 };
+
+// `iterations` steps of x <- x + step * (mean of the one-ring - x) over dm's
+// adjacency (vertices without neighbours stay put).
+std::vector<float> laplacian_smooth(const DeltaMush& dm, std::span<const float> x, int iterations, float step);
 
 DeltaMush delta_mush_bind(const Mesh& mesh, const DeltaMushParams& params = {});
 // Smooths `posed` (typically LBS of a pose) and adds the rest deltas back in

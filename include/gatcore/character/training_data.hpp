@@ -36,7 +36,8 @@ struct TrainingData {
   std::vector<Motion> motions;
   SuperSkeleton super;
 
-  std::int64_t feature_dim() const { return 6 + super.num_bones(); }
+  // 6 + bones, plus 3 per distortion scale for the displacement task.
+  std::int64_t feature_dim(models::Task task) const;
   const std::vector<std::int32_t>& part(DatasetPart p) const;
 };
 
