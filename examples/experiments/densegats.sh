@@ -17,8 +17,10 @@
 #                  that many more minutes into <label>-long.gcm and evaluated too (the equal-budget
 #                  comparison stays intact); DG_LONG_EPOCHS caps the extra epochs
 #     A DG_MODELS label ending in -l1 (densegats-l1) trains that model with gat train --loss l1.
+#     DG_DISTORTION  gat dataset build --distortion-scales (default 1,4,16; 'none': the paper's features only)
 #     DG_POSES     random poses per training character per epoch   DG_SUBSAMPLE vertices per sample
-#     DG_STRIDE    evaluate every k-th motion frame                DG_MOTIONS  test BVHs (space separated)
+#     DG_STRIDE    evaluate every k-th motion frame                DG_MOTIONS  test BVHs (space separated;
+#                  default: CMU walk, and at the full budget CMU jump too)
 #     DG_MODELS    models to train                                 DG_THREADS  OpenMP threads
 #     DG_NICE      niceness of training / evaluation               GAT         the gat binary
 #     GATCORE_DATA the shared data (default: ../shared/data beside the repository)
@@ -43,14 +45,18 @@ case "$budget" in
   ci)   : "${DG_MINUTES:=0}" "${DG_EPOCHS:=1}" "${DG_POSES:=1}" "${DG_SUBSAMPLE:=200}" "${DG_STRIDE:=172}"
         : "${DG_MAPFRAMES:=1}" "${DG_LONG_MINUTES:=0}" ;;
   full) : "${DG_MINUTES:=8}" "${DG_EPOCHS:=100000}" "${DG_POSES:=16}" "${DG_SUBSAMPLE:=1000}" "${DG_STRIDE:=8}"
-        : "${DG_MAPFRAMES:=2}" "${DG_LONG_MINUTES:=12}" ;;
+        : "${DG_MAPFRAMES:=2}" "${DG_LONG_MINUTES:=6}" ;;
   *) echo "densegats.sh: --budget expects ci or full, got '$budget'" >&2; exit 2 ;;
 esac
 data="${GATCORE_DATA:-$root/../shared/data}"
 out="${out:-$root/build/experiments/densegats-$budget}"
 gat="${GAT:-$root/build/examples/gat}"
 : "${DG_MODELS:=densegats densegats-l1 densegats-noself densegats-nodense origat neuroskinning}"
-: "${DG_MOTIONS:=$data/motion/cmu/walk.bvh}"
+if [ -z "${DG_MOTIONS:-}" ]; then  # full budget: the jump too, when the data has it
+  DG_MOTIONS="$data/motion/cmu/walk.bvh"
+  if [ "$budget" = full ] && [ -f "$data/motion/cmu/jump.bvh" ]; then DG_MOTIONS+=" $data/motion/cmu/jump.bvh"; fi
+fi
+: "${DG_DISTORTION:=1,4,16}"
 : "${DG_THREADS:=2}" "${DG_NICE:=10}"
 men="$data/characters/quaternius/modular_men"
 women="$data/characters/quaternius/modular_women"
@@ -68,10 +74,12 @@ t_start=$(date +%s)
 # weights and is skipped), split by character with the seed: 11 train / 2
 # validation / 2 test. Training poses: random within the humanoid joint limits
 # (no motions in the dataset: the test motions are never seen in training).
+# DenseGATs inputs: the paper's features plus the detail-distortion columns at
+# DG_DISTORTION's smoothing scales (docs/RESULTS.md explains why).
 echo "== dataset (seed $seed)"
 run "$gat" dataset build --skip-bad -o "$out/dataset.json" "$men" "$women" \
   --joint-limits humanoid --random-poses "$DG_POSES" --subsample "$DG_SUBSAMPLE" \
-  --seed "$seed" --validation 0.14 --test 0.14 2>&1 | tee "$out/dataset.log"
+  --seed "$seed" --validation 0.14 --test 0.14 --distortion-scales "$DG_DISTORTION" 2>&1 | tee "$out/dataset.log"
 
 # 2. Training, one model after the other, each with the same budget. A label
 # ending in -l1 trains that model with the L1 loss (gat train --loss l1)
@@ -138,6 +146,7 @@ if command -v python3 > /dev/null; then python3 "$here/png_recompress.py" "$out"
   echo "# DenseGATs experiment ($budget budget, seed $seed)"
   echo
   echo "- dataset: $out/dataset.json ($(grep -o '[0-9]* characters (train [0-9]*, validation [0-9]*, test [0-9]*)' "$out/dataset.log"))"
+  echo "- DenseGATs inputs: the paper's features + detail distortion at scales ${DG_DISTORTION}"
   echo "- training: ${DG_POSES} random poses per character per epoch, ${DG_SUBSAMPLE}-vertex windows, budget ${DG_MINUTES} min / ${DG_EPOCHS} epochs per model (unless listed below), ${DG_THREADS} threads, nice ${DG_NICE}"
   echo "- test motions: $DG_MOTIONS, every ${DG_STRIDE}th frame"
   echo "- machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load average at the end $(cut -d' ' -f1-3 /proc/loadavg)"
