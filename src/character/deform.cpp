@@ -41,20 +41,30 @@ DualQuat to_dual_quat(const Mat4& m) {
 
 }  // namespace
 
+namespace {
+
+// Vertex v's blended 3x4 skinning matrix sum_k w_k M_k, column-major
+// (columns 0..2: linear part, column 3: translation; rows 0..2).
+void blend_matrix(const SkinWeights& W, std::span<const Mat4> skinning, std::int64_t v, float m[12]) {
+  std::fill(m, m + 12, 0.0f);
+  for (std::int64_t k = W.ptr[v]; k < W.ptr[v + 1]; ++k) {
+    const Mat4& s = skinning[W.joint[k]];
+    const float w = W.weight[k];
+    for (int c = 0; c < 12; ++c) m[c] += w * s[(c / 3) * 4 + c % 3];
+  }
+}
+
+}  // namespace
+
 std::vector<float> linear_blend_skinning(const Mesh& mesh, std::span<const Mat4> skinning) {
   check_skinning(mesh, skinning);
   const std::int64_t n = mesh.num_vertices();
   std::vector<float> out(static_cast<std::size_t>(3 * n));
-  const auto& W = mesh.weights;
   const float* P = mesh.positions.data();
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
-    float m[12] = {};
-    for (std::int64_t k = W.ptr[v]; k < W.ptr[v + 1]; ++k) {
-      const Mat4& s = skinning[W.joint[k]];
-      const float w = W.weight[k];
-      for (int c = 0; c < 12; ++c) m[c] += w * s[(c / 3) * 4 + c % 3];  // columns 0..3, rows 0..2
-    }
+    float m[12];
+    blend_matrix(mesh.weights, skinning, v, m);
     const float x = P[3 * v], y = P[3 * v + 1], z = P[3 * v + 2];
     for (int r = 0; r < 3; ++r) out[3 * v + r] = m[r] * x + m[3 + r] * y + m[6 + r] * z + m[9 + r];
   }
@@ -67,15 +77,10 @@ std::vector<float> skin_vectors(const Mesh& mesh, std::span<const Mat4> skinning
   GATCORE_CHECK(static_cast<std::int64_t>(vectors.size()) == 3 * n, "skin_vectors: ", vectors.size() / 3,
                 " vectors for ", n, " vertices");
   std::vector<float> out(static_cast<std::size_t>(3 * n));
-  const auto& W = mesh.weights;
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
-    float m[9] = {};
-    for (std::int64_t k = W.ptr[v]; k < W.ptr[v + 1]; ++k) {
-      const Mat4& s = skinning[W.joint[k]];
-      const float w = W.weight[k];
-      for (int c = 0; c < 9; ++c) m[c] += w * s[(c / 3) * 4 + c % 3];  // columns 0..2, rows 0..2
-    }
+    float m[12];
+    blend_matrix(mesh.weights, skinning, v, m);  // the translation column is not used
     const float x = vectors[3 * v], y = vectors[3 * v + 1], z = vectors[3 * v + 2];
     for (int r = 0; r < 3; ++r) out[3 * v + r] = m[r] * x + m[3 + r] * y + m[6 + r] * z;
   }
