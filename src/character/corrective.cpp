@@ -11,7 +11,8 @@ namespace gatcore::character {
 CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
                                             const BoneAliases& aliases, std::span<const int> distortion_scales) {
   CorrectiveDeformer d;
-  // Only the mesh graph and normalisation are used: no Delta Mush binding.
+  // No Delta Mush smoothing (iterations 0): only its one-ring adjacency is
+  // used (distortion columns), with the mesh graph and the normalisation.
   d.prepared = prepare_character(ch, DeltaMushParams{0, 0.5f}, distortion_scales);
   d.mapping = map_bones(ch.skeleton, bones, aliases, ch.name);
   d.num_bones = static_cast<std::int64_t>(bones.size());
