@@ -37,28 +37,18 @@ struct Rows {
   std::vector<std::vector<double>> col;  // [features][3 n]
 };
 
-void add(Rows& rows, const PreparedCharacter& pc, const Pose& pose, const std::vector<int>& scales) {
+void add(Rows& rows, const PreparedCharacter& pc, const Pose& pose) {
   const DenseGatsSample s = make_densegats_sample(pc, pose, 0, 0, true);
-  const Character& ch = pc.character;
-  const std::int64_t n = ch.mesh.num_vertices();
+  const std::int64_t n = pc.character.mesh.num_vertices();
   std::vector<float> p(3 * n);
   for (std::int64_t v = 0; v < n; ++v)
     for (int c = 0; c < 3; ++c) p[3 * v + c] = s.features.at(v, c);
-  const std::vector<Mat4> g = global_transforms(ch.skeleton, pose);
-  std::vector<Mat4> skin(g.size());
-  for (std::size_t j = 0; j < g.size(); ++j) skin[j] = mul(g[j], ch.skeleton.inverse_bind[j]);
-  const Mat4 to_root = inverse(s.root_motion);
-  const auto posed = laplacian_details(pc.delta_mush, p, scales);
-  const auto rest = laplacian_details(pc.delta_mush, ch.mesh.positions, scales);
-  if (rows.col.empty()) rows.col.resize(2 * scales.size());
-  for (std::size_t k = 0; k < scales.size(); ++k) {
-    const std::vector<float> a = skin_vectors(ch.mesh, skin, rest[k]);
-    for (std::int64_t v = 0; v < n; ++v)
-      for (int c = 0; c < 3; ++c) {
-        rows.col[k].push_back(posed[k][3 * v + c]);
-        const float r = to_root[c] * a[3 * v] + to_root[4 + c] * a[3 * v + 1] + to_root[8 + c] * a[3 * v + 2];
-        rows.col[scales.size() + k].push_back(r * pc.norm.scale);
-      }
+  const DetailHalves h = detail_halves(pc, skinning_matrices(pc.character.skeleton, pose), p, inverse(s.root_motion));
+  const std::size_t S = h.posed.size();
+  if (rows.col.empty()) rows.col.resize(2 * S);
+  for (std::size_t k = 0; k < S; ++k) {
+    rows.col[k].insert(rows.col[k].end(), h.posed[k].begin(), h.posed[k].end());
+    rows.col[S + k].insert(rows.col[S + k].end(), h.rest[k].begin(), h.rest[k].end());
   }
   for (std::int64_t v = 0; v < n; ++v) {
     for (int c = 0; c < 3; ++c) rows.target.push_back(s.target.at(v, c));
@@ -104,26 +94,29 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const TrainingData td = load_training_data(argv[1]);
+    TrainingData td = load_training_data(argv[1]);
     const Motion motion = load_bvh(argv[2]);
     const int stride = argc > 3 ? std::atoi(argv[3]) : 8;
     if (stride < 1) throw InvalidArgument(std::string("STRIDE must be >= 1, got '") + argv[3] + "'");
     std::vector<int> scales = td.description.distortion_scales;
-    if (scales.empty()) scales = {1, 4, 16};
+    if (scales.empty()) {  // a dataset of the paper's features: probe the default scales
+      scales = {1, 4, 16};
+      for (PreparedCharacter& pc : td.characters) set_distortion_scales(pc, scales);
+    }
     Rows train, test_random, test_motion;
     std::mt19937 rng(7);
     const auto random_poses = [&](Rows& rows, std::int32_t c) {
       const PreparedCharacter& pc = td.characters[std::size_t(c)];
       const auto limits = td.description.joint_limits ? td.description.joint_limits->limits_for(pc.character.skeleton)
                                                       : uniform_limits(pc.character.skeleton, td.description.pose_angle);
-      for (int i = 0; i < 8; ++i) add(rows, pc, random_pose(pc.character.skeleton, pc.rest, limits, rng), scales);
+      for (int i = 0; i < 8; ++i) add(rows, pc, random_pose(pc.character.skeleton, pc.rest, limits, rng));
     };
     for (std::int32_t c : td.part(DatasetPart::train)) random_poses(train, c);
     for (std::int32_t c : td.part(DatasetPart::test)) {
       random_poses(test_random, c);
       const PreparedCharacter& pc = td.characters[std::size_t(c)];
       const Clip clip = retarget(motion, pc.character.skeleton, mat4_identity());
-      for (std::size_t f = 0; f < clip.frames.size(); f += std::size_t(stride)) add(test_motion, pc, clip.frames[f], scales);
+      for (std::size_t f = 0; f < clip.frames.size(); f += std::size_t(stride)) add(test_motion, pc, clip.frames[f]);
     }
     const int S = static_cast<int>(scales.size());
     std::vector<int> posed, rest, both;

@@ -37,9 +37,33 @@ PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& 
   pc.delta_mush = delta_mush_bind(pc.character.mesh, params);
   pc.mesh_graph = graph_from_triangles(pc.character.mesh.num_vertices(), pc.character.mesh.triangles);
   pc.rest = bind_pose(pc.character.skeleton);
-  pc.distortion_scales.assign(distortion_scales.begin(), distortion_scales.end());
-  pc.rest_details = laplacian_details(pc.delta_mush, pc.character.mesh.positions, pc.distortion_scales);
+  set_distortion_scales(pc, distortion_scales);
   return pc;
+}
+
+void set_distortion_scales(PreparedCharacter& pc, std::span<const int> scales) {
+  pc.rest_details = laplacian_details(pc.delta_mush, pc.character.mesh.positions, scales);  // checks the scales
+  pc.distortion_scales.assign(scales.begin(), scales.end());
+}
+
+DetailHalves detail_halves(const PreparedCharacter& pc, std::span<const Mat4> skinning,
+                           std::span<const float> lbs_root, const Mat4& to_root) {
+  DetailHalves h;
+  h.posed = laplacian_details(pc.delta_mush, lbs_root, pc.distortion_scales);
+  for (const std::vector<float>& rest : pc.rest_details) {
+    // World -> root frame, normalised: the root motion is rigid and the
+    // normalisation a uniform scale, so vectors turn by to_root's rotation
+    // and scale by norm.scale.
+    std::vector<float> r = skin_vectors(pc.character.mesh, skinning, rest);
+    for (std::size_t v = 0; v < r.size() / 3; ++v) {
+      const float* a = &r[3 * v];
+      const float x = a[0], y = a[1], z = a[2];
+      for (int c = 0; c < 3; ++c)
+        r[3 * v + c] = (to_root[c] * x + to_root[4 + c] * y + to_root[8 + c] * z) * pc.norm.scale;
+    }
+    h.rest.push_back(std::move(r));
+  }
+  return h;
 }
 
 namespace {
@@ -134,22 +158,15 @@ DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& p
     }
   s.features = densegats_features(p, n, joints);
   if (!pc.distortion_scales.empty()) {
-    // Root frame, normalised: the root motion is rigid and normalisation a
-    // uniform scale, so vectors turn by to_root's rotation and scale by norm.scale.
-    const std::vector<std::vector<float>> posed = laplacian_details(pc.delta_mush, lbs_root, pc.distortion_scales);
-    const std::int64_t S = static_cast<std::int64_t>(posed.size());
+    const DetailHalves h = detail_halves(pc, skin, lbs_root, to_root);
+    const std::int64_t S = static_cast<std::int64_t>(h.posed.size());
     s.distortion = Tensor::empty(m, 3 * S);
-    for (std::int64_t k = 0; k < S; ++k) {
-      const std::vector<float> skinned = skin_vectors(ch.mesh, skin, pc.rest_details[std::size_t(k)]);
-      for (std::int64_t i = 0; i < m; ++i) {
-        const std::int64_t v = s.vertices[i];
-        const float* a = &skinned[3 * v];
+    for (std::int64_t k = 0; k < S; ++k)
+      for (std::int64_t i = 0; i < m; ++i)
         for (int c = 0; c < 3; ++c) {
-          const float r = (to_root[c] * a[0] + to_root[4 + c] * a[1] + to_root[8 + c] * a[2]) * pc.norm.scale;
-          s.distortion.at(i, 3 * k + c) = r - posed[std::size_t(k)][3 * v + c];
+          const std::size_t e = std::size_t(3 * s.vertices[i] + c);
+          s.distortion.at(i, 3 * k + c) = h.rest[std::size_t(k)][e] - h.posed[std::size_t(k)][e];
         }
-      }
-    }
   }
   s.graph = induced_subgraph(pc.mesh_graph, s.vertices);
   return s;

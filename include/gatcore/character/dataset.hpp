@@ -42,6 +42,18 @@ struct PreparedCharacter {
 };
 PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {},
                                     std::span<const int> distortion_scales = {});
+// Sets the scales (checked) and recomputes the rest details.
+void set_distortion_scales(PreparedCharacter& pc, std::span<const int> scales);
+
+// The two halves of the distortion columns over the whole mesh, root frame,
+// normalised, [scales][3 n] each: the rest details carried by `skinning`
+// (skinning_matrices of the pose) and the details of the root-frame LBS mesh
+// `lbs_root`. The distortion is rest - posed.
+struct DetailHalves {
+  std::vector<std::vector<float>> rest, posed;
+};
+DetailHalves detail_halves(const PreparedCharacter& pc, std::span<const Mat4> skinning,
+                           std::span<const float> lbs_root, const Mat4& to_root);
 
 // Features and targets are expressed in the character's root frame: the
 // skeleton root above the hips (the joint that carries root motion) is moved
