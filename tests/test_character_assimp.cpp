@@ -14,8 +14,8 @@
 #include <map>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/deform.hpp"
-#include "gatcore/character/import.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/io/import.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

@@ -7,10 +7,11 @@
 #include <set>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/dataset.hpp"
-#include "gatcore/character/gltf.hpp"
-#include "gatcore/character/motion.hpp"
-#include "gatcore/character/procedural.hpp"
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/io/gltf.hpp"
+#include "gatcore/character/rig/motion.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/io/bvh.hpp"
 
 using namespace gatcore::character;
 

@@ -7,8 +7,8 @@
 #include <map>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/deform.hpp"
-#include "gatcore/character/detail_distortion.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

@@ -4,9 +4,9 @@
 #include <filesystem>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/gltf.hpp"
-#include "gatcore/character/metrics.hpp"
-#include "gatcore/character/super_skeleton.hpp"
+#include "gatcore/character/io/gltf.hpp"
+#include "gatcore/character/eval/metrics.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

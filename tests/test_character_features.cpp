@@ -8,9 +8,9 @@
 #include <set>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/deform.hpp"
-#include "gatcore/character/features.hpp"
-#include "gatcore/character/gltf.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/features/features.hpp"
+#include "gatcore/character/io/gltf.hpp"
 
 using namespace gatcore::character;
 

@@ -9,8 +9,8 @@
 #include <set>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/deform.hpp"
-#include "gatcore/character/gltf.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/io/gltf.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

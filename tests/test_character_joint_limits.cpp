@@ -10,11 +10,11 @@
 #include <random>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/dataset.hpp"
-#include "gatcore/character/gltf.hpp"
-#include "gatcore/character/joint_limits.hpp"
-#include "gatcore/character/procedural.hpp"
-#include "gatcore/character/super_skeleton.hpp"
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/io/gltf.hpp"
+#include "gatcore/character/rig/joint_limits.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

@@ -14,8 +14,8 @@
 #include <zlib.h>
 #endif
 
-#include "gatcore/character/loss_curve.hpp"
-#include "gatcore/character/plot.hpp"
+#include "gatcore/character/viz/loss_curve.hpp"
+#include "gatcore/character/viz/plot.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

@@ -6,8 +6,8 @@
 #include <iterator>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/deform.hpp"
-#include "gatcore/character/render.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/dataset.hpp"
-#include "gatcore/character/weight_eval.hpp"
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

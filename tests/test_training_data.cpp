@@ -1,5 +1,5 @@
 // Samples for the trainer from a dataset of the character pipeline
-// (character/training_data.hpp): procedural characters, both tasks, a few
+// (character/data/training_data.hpp): procedural characters, both tasks, a few
 // epochs of tiny models, checkpoint metadata, bad files.
 #include <catch2/catch.hpp>
 
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <set>
 
-#include "gatcore/character/training_data.hpp"
+#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
 
 using namespace gatcore;

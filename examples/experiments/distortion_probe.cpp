@@ -24,8 +24,9 @@
 
 #include <Eigen/Dense>
 
-#include "gatcore/character/detail_distortion.hpp"
-#include "gatcore/character/training_data.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/data/training_data.hpp"
+#include "gatcore/character/io/bvh.hpp"
 
 using namespace gatcore;
 using namespace gatcore::character;

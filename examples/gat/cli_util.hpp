@@ -2,7 +2,7 @@
 // Small helpers shared by the character commands (predict-weights, deform).
 #include <string>
 
-#include "gatcore/character/super_skeleton.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/tensor.hpp"
 
 namespace gat {

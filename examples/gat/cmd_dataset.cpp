@@ -9,12 +9,13 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "gatcore/character/dataset.hpp"
-#include "gatcore/character/detail_distortion.hpp"
-#include "gatcore/character/gltf.hpp"
-#include "gatcore/character/motion.hpp"
-#include "gatcore/character/procedural.hpp"
-#include "gatcore/character/weight_eval.hpp"
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/io/gltf.hpp"
+#include "gatcore/character/rig/motion.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/eval/weight_eval.hpp"
+#include "gatcore/character/io/bvh.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;
@@ -33,9 +34,9 @@ void usage(std::FILE* f) {
                "  --dm-iterations I (10) --dm-step S (0.5)       --skip-bad (skip unreadable characters)\n"
                "  --distortion-scales K1,K2,... (1,4,16)  DenseGATs input columns: the skinning distortion of\n"
                "             the mesh's detail coordinates at these smoothing scales (see\n"
-               "             include/gatcore/character/detail_distortion.hpp); 'none' = the paper's features only\n"
+               "             include/gatcore/character/deform/detail_distortion.hpp); 'none' = the paper's features only\n"
                "  --joint-limits FILE|humanoid  per-joint random-pose limits (JSON table, see\n"
-               "             include/gatcore/character/joint_limits.hpp; 'humanoid' = the built-in table);\n"
+               "             include/gatcore/character/rig/joint_limits.hpp; 'humanoid' = the built-in table);\n"
                "             recorded in the dataset; without it every joint axis gets +-pose-angle\n"
                "  --test-characters A,B,...  --validation-characters C,...  an explicit split instead of the\n"
                "             seeded one: each entry names one character by the end of its path (e.g.\n"

@@ -14,10 +14,11 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
-#include "gatcore/character/bake.hpp"
-#include "gatcore/character/corrective.hpp"
-#include "gatcore/character/import.hpp"
-#include "gatcore/character/motion.hpp"
+#include "gatcore/character/io/bake.hpp"
+#include "gatcore/character/inference/corrective.hpp"
+#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/import.hpp"
+#include "gatcore/character/rig/motion.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore;

@@ -10,10 +10,11 @@
 #include <string>
 
 #include "commands.hpp"
-#include "gatcore/character/dataset.hpp"
-#include "gatcore/character/import.hpp"
-#include "gatcore/character/motion.hpp"
-#include "gatcore/character/render.hpp"
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/import.hpp"
+#include "gatcore/character/rig/motion.hpp"
+#include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

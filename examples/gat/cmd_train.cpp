@@ -1,7 +1,7 @@
 // `gat train`: trains any model of issue 3 by name, with a progress line,
 // validation every epoch, a resumable checkpoint every epoch and Ctrl-C
 // handling. It trains on a dataset of the character pipeline (--data, see
-// character/training_data.hpp) or on the embedded tube character
+// character/data/training_data.hpp) or on the embedded tube character
 // (tube_data.hpp).
 #include <unistd.h>
 
@@ -20,9 +20,9 @@
 #include <omp.h>
 
 #include "commands.hpp"
-#include "gatcore/character/detail_distortion.hpp"
-#include "gatcore/character/loss_curve.hpp"
-#include "gatcore/character/training_data.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/viz/loss_curve.hpp"
+#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
@@ -301,7 +301,7 @@ int gat::cmd_train(int argc, char** argv) {
                             ? "neuroskinning: rest position (3), rest normal (3), distance to each skeleton bone "
                               "segment; world frame, hips at the origin, height 1 (character::compute_normalisation)"
                             : "densegats: posed position (3), posed normal (3), distance to each skeleton joint, "
-                              "then 3 per distortion scale (character/detail_distortion.hpp); root frame, "
+                              "then 3 per distortion scale (character/deform/detail_distortion.hpp); root frame, "
                               "normalised like neuroskinning";
   } else {
     extra["data"] = "embedded tube character";

@@ -1,0 +1,159 @@
+#pragma once
+// Training samples for the two models, generated on the fly, and the
+// train / validation / test split by character.
+//
+// A PreparedCharacter holds what every sample of one character shares: the
+// character re-expressed in its world bind frame (so Delta Mush deltas and
+// features are in world units), its normalisation, the Delta Mush binding
+// (its parameters are the dataset's reference-deformer record) and the mesh
+// graph. Samples are in normalised coordinates (NormalisationStats).
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <span>
+#include <vector>
+
+#include "gatcore/character/rig/character.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/features/features.hpp"
+#include "gatcore/character/rig/joint_limits.hpp"
+#include "gatcore/character/rig/motion.hpp"
+#include "gatcore/graph.hpp"
+#include "gatcore/tensor.hpp"
+
+namespace gatcore::character {
+
+// The character with bind_to_world applied: positions in the world frame,
+// inverse bind matrices compensated, so skinning the world bind pose gives
+// the world rest mesh.
+Character to_world(const Character& ch, const Mat4& bind_to_world);
+
+struct PreparedCharacter {
+  Character character;  // world frame (to_world)
+  NormalisationStats norm;  // of the world-frame character (bind_to_world = identity)
+  DeltaMush delta_mush;
+  CsrGraph mesh_graph;  // mesh edges + self-loops
+  Pose rest;            // bind pose of the world-frame character
+  // DenseGATs' detail-distortion columns (detail_distortion.hpp): the
+  // smoothing scales and the world-frame rest details, one per scale.
+  std::vector<int> distortion_scales;
+  std::vector<std::vector<float>> rest_details;
+};
+PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {},
+                                    std::span<const int> distortion_scales = {});
+// Sets the scales (checked) and recomputes the rest details.
+void set_distortion_scales(PreparedCharacter& pc, std::span<const int> scales);
+
+// The two halves of the distortion columns over the whole mesh, root frame,
+// normalised, [scales][3 n] each: the rest details carried by `skinning`
+// (skinning_matrices of the pose) and the details of the root-frame LBS mesh
+// `lbs_root`. The distortion is rest - posed.
+struct DetailHalves {
+  std::vector<std::vector<float>> rest, posed;
+};
+DetailHalves detail_halves(const PreparedCharacter& pc, std::span<const Mat4> skinning,
+                           std::span<const float> lbs_root, const Mat4& to_root);
+
+// Features and targets are expressed in the character's root frame: the
+// skeleton root above the hips (the joint that carries root motion) is moved
+// back to its rest placement, so a character walking away or turning gives
+// the network the same inputs as one posed in place (random training poses
+// keep the root at rest). `root_motion` maps that frame back to the world.
+struct DenseGatsSample {
+  Tensor features;  // [m, 6 + J]: posed position, posed normal, distance to each joint (normalised, root frame)
+  Tensor distortion;  // [m, 3 S]: detail distortion at the character's S scales (normalised, root frame); S = 0: empty
+  Tensor target;    // [m, 3]: Delta Mush - LBS displacement (normalised units, root frame)
+  Tensor lbs;       // [m, 3]: LBS positions (normalised, world frame)
+  Mat4 root_motion = mat4_identity();  // the root's current world transform times its rest inverse
+  CsrGraph graph;   // subgraph of the mesh graph induced by `vertices`
+  std::vector<std::int32_t> vertices;
+  std::int32_t character = -1, pose = -1;
+};
+
+// One pose of one character; `count` consecutive vertices from `first`
+// (count <= 0 or >= n: the whole mesh). Normals and Delta Mush are computed
+// on the whole mesh, then restricted. `with_target` false (inference) skips
+// Delta Mush and leaves `target` undefined.
+DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
+                                      std::int64_t count, bool with_target = true);
+// The model's input: `bone_features` ([m, 6 + B], the sample's features in
+// the model's bone columns) followed by the sample's distortion columns.
+Tensor densegats_model_features(const Tensor& bone_features, const DenseGatsSample& s);
+// A root-frame displacement (target or prediction) in the world frame (normalised units).
+Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& offset);
+// The joint that carries root motion: the topmost ancestor of the
+// normalisation's origin joint (the hips).
+std::int32_t root_motion_joint(const PreparedCharacter& pc);
+
+struct NeuroSkinningSample {
+  Tensor features;  // [m, 6 + J]: rest position, rest normal, distance to each bone segment (normalised)
+  Tensor weights;   // [m, J] ground-truth skin weights
+  CsrGraph graph;
+  std::vector<std::int32_t> vertices;
+  std::int32_t character = -1;
+};
+// `vertices` empty: the whole mesh.
+NeuroSkinningSample make_neuroskinning_sample(const PreparedCharacter& pc, std::span<const std::int32_t> vertices = {});
+
+struct Split {
+  std::vector<std::int32_t> train, validation, test;  // character indices
+};
+// Shuffles characters with `seed` (std::mt19937 integers, portable) and cuts
+// off round(fraction * n) for validation and test (at least one each when
+// the fraction is positive and n >= 3). Never splits a character's poses.
+Split split_by_character(std::int32_t num_characters, float validation, float test, std::uint32_t seed);
+
+struct SampleTask {
+  std::int32_t character = 0, pose_index = 0;
+  Pose pose;
+  std::int64_t first = 0, count = 0;
+};
+// Generates the samples of `tasks` in a oneTBB pipeline (at most `tokens` in
+// flight, computed in parallel, handed to `sink` in task order on the calling
+// thread's pipeline) so a trainer consuming them keeps being fed. OpenMP is
+// disabled inside the pipeline's tasks (SerialRegion).
+void stream_densegats_samples(const std::vector<PreparedCharacter>& characters, const std::vector<SampleTask>& tasks,
+                              const std::function<void(DenseGatsSample&&)>& sink, int tokens = 4);
+
+}  // namespace gatcore::character
+
+namespace gatcore::character {
+
+// What `gat dataset build` writes (JSON): the sources and every setting the
+// samples depend on, so a trainer regenerates identical samples on the fly.
+struct DatasetDescription {
+  std::vector<std::string> characters;  // file paths, or "procedural:humanoid:SEED" / "procedural:creature:SEED"
+  std::vector<std::string> motions;     // BVH files, retargeted onto every character (CMU joint names)
+  int random_poses = 32;                // per character per epoch
+  float pose_angle = 0.5f;              // uniform_limits(+-pose_angle) around the bind pose, unless:
+  std::optional<JointLimitTable> joint_limits;  // per-joint limits for the random poses (recorded in full)
+  int motion_stride = 4;                // every k-th motion frame
+  std::uint32_t seed = 0;
+  DeltaMushParams delta_mush;           // the reference deformer's parameters
+  std::int64_t subsample = 1000;        // DenseGATs: consecutive vertices per sample (<= 0: whole mesh)
+  std::vector<int> distortion_scales;   // DenseGATs: detail-distortion columns (empty: the paper's features only)
+  float validation = 0.1f, test = 0.1f;
+  Split split;                          // by character, from seed
+};
+
+// Fills the split from the fractions and the seed.
+DatasetDescription describe_dataset(std::vector<std::string> characters, std::vector<std::string> motions,
+                                    const DatasetDescription& settings = {});
+// File entries are written relative to the dataset file's directory and
+// resolved against it on load (procedural entries unchanged).
+void save_dataset(const std::string& path, const DatasetDescription& d);
+// Throws InvalidArgument naming the file and the field for bad files.
+DatasetDescription load_dataset(const std::string& path);
+// A character by its dataset entry (a file, or a procedural spec).
+Character load_dataset_character(const std::string& entry);
+
+// The DenseGATs tasks of one epoch for the given characters (indices into
+// d.characters; `prepared` and `motions` are the loaded ones, all of them):
+// random poses and strided motion frames, each with a random vertex window;
+// deterministic per (seed, epoch).
+std::vector<SampleTask> dataset_tasks(const DatasetDescription& d, const std::vector<PreparedCharacter>& prepared,
+                                      const std::vector<Motion>& motions,
+                                      std::span<const std::int32_t> characters, int epoch);
+
+}  // namespace gatcore::character

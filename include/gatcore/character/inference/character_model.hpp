@@ -1,0 +1,53 @@
+#pragma once
+// A trained checkpoint applied to a character it has never seen: which kind
+// of node features it was trained on, its output / feature bones (the
+// training dataset's super skeleton, by normalised name), and the mapping of
+// a character's joints onto those bones.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gatcore/character/rig/skeleton.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
+#include "gatcore/models/checkpoint.hpp"
+#include "gatcore/tensor.hpp"
+
+namespace gatcore::character {
+
+// The node features a checkpoint was trained on (metadata "features";
+// checkpoints written before that key: a dataset's features if it records a
+// data_path, else the embedded tube's).
+enum class FeatureKind { tube, neuroskinning, densegats };
+FeatureKind checkpoint_features(const models::CheckpointFile& f);
+const char* feature_kind_name(FeatureKind k);
+// The DenseGATs detail-distortion scales a checkpoint was trained with
+// (metadata "distortion_scales"; absent: none, the paper's features).
+std::vector<int> checkpoint_distortion_scales(const models::CheckpointFile& f, const std::string& path);
+
+// Checks that the checkpoint `path` holds a model of `task` trained on
+// character features (not the embedded tube) and returns its bones (metadata
+// "skeleton"), consistent with the model's input width (6 + |B|, plus 3 per
+// distortion scale for displacements) and, for
+// skin weights, its output width (|B|). Throws InvalidArgument naming the
+// file and what does not fit (e.g. a DenseGATs checkpoint given for weights).
+std::vector<std::string> character_model_bones(const models::LoadedModel& m, const std::string& path,
+                                               models::Task task);
+
+// Joints of a character -> the model's bones, by normalise_bone_name, then
+// `aliases` (normalised name -> normalised bone name).
+struct BoneMapping {
+  std::vector<std::int32_t> joint_to_bone;  // [joints] bone index, -1: no such bone
+  std::vector<std::int32_t> bone_to_joint;  // [bones] joint index, -1: the character lacks it
+  std::vector<std::string> unmapped;        // joint names without a bone
+  std::int32_t num_mapped() const;
+};
+// Throws InvalidArgument naming `what` if no joint maps (listing a few joint
+// and bone names), or if two joints map to the same bone.
+BoneMapping map_bones(const Skeleton& s, const std::vector<std::string>& bones, const BoneAliases& aliases,
+                      const std::string& what);
+
+// [n, 6 + J] features in the character's joint order -> [n, 6 + B] in the
+// model's bone order (bones the character lacks: 0), as in training.
+Tensor features_in_bone_order(const Tensor& f, const BoneMapping& m);
+
+}  // namespace gatcore::character

@@ -1,0 +1,36 @@
+#pragma once
+// DenseGATs at playback: a character posed frame by frame, each frame linear
+// blend skinned and corrected by a trained displacement model (densegats, its
+// ablations, origat), with the features computed exactly as in training.
+#include <span>
+#include <string>
+#include <vector>
+
+#include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/models/model.hpp"
+#include "gatcore/models/sample.hpp"
+
+namespace gatcore::character {
+
+struct CorrectiveDeformer {
+  PreparedCharacter prepared;  // world frame; poses are of prepared.character.skeleton
+  BoneMapping mapping;         // joints -> the model's bones
+  std::int64_t num_bones = 0;
+};
+// `distortion_scales`: those the model was trained with (checkpoint_distortion_scales).
+CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
+                                            const BoneAliases& aliases = {}, std::span<const int> distortion_scales = {});
+
+struct CorrectedFrame {
+  std::vector<float> lbs;        // [3 n] LBS positions, glTF world frame (welded vertices)
+  std::vector<float> corrected;  // [3 n] lbs + the predicted correction, same frame
+  double ms_features = 0, ms_inference = 0;
+};
+// LBS of `pose`, DenseGATs features of the posed mesh (normalised, the model's
+// bone order), the model's prediction on the whole mesh (on the model's
+// device), converted from normalised units back to the character's.
+CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, const models::Normaliser& norm,
+                            const Pose& pose);
+
+}  // namespace gatcore::character

@@ -1,0 +1,36 @@
+#pragma once
+// A rigged character: one welded mesh, one skeleton, the map back to the
+// file's vertices (for exports) and the file's animations.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gatcore/character/rig/mesh.hpp"
+#include "gatcore/character/rig/pose.hpp"
+#include "gatcore/character/rig/skeleton.hpp"
+
+namespace gatcore::character {
+
+// One primitive of the source file: its vertices are file vertices
+// [first_vertex, first_vertex + num_vertices) of the concatenation.
+struct SourcePrimitive {
+  std::int32_t mesh = 0;       // glTF mesh index
+  std::int32_t primitive = 0;  // primitive index within the mesh
+  std::int32_t node = 0;       // node that instantiates it
+  std::int64_t first_vertex = 0;
+  std::int64_t num_vertices = 0;
+};
+
+struct Character {
+  std::string name;                       // file name (for messages)
+  Mesh mesh;                              // welded
+  Skeleton skeleton;
+  std::vector<std::int32_t> welded_from_file;  // [file vertices] -> welded vertex id
+  std::vector<SourcePrimitive> primitives;
+  std::vector<std::int32_t> joint_nodes;  // [joints] the file node of each joint (-1: none)
+  std::vector<Clip> clips;
+
+  std::int64_t num_file_vertices() const { return static_cast<std::int64_t>(welded_from_file.size()); }
+};
+
+}  // namespace gatcore::character

@@ -1,0 +1,53 @@
+#pragma once
+// Per-joint anatomical rotation limits for random training poses: a table of
+// rules (a glob pattern on the normalised joint name, as the super skeleton
+// normalises it: "UpperArm.L" -> "upperarm.l"; per axis min / max in
+// degrees), matched in order (first match wins), with a fallback for joints
+// no rule names. Roots stay at rest.
+//
+// File format (JSON):
+//   {"format": "gatcore-joint-limits", "version": 1,
+//    "default": {"x": [-10, 10], "y": [-10, 10], "z": [-10, 10]},
+//    "joints": [{"match": "lowerleg.*", "x": [0, 120], "y": [-3, 3], "z": [-3, 3]}, ...]}
+// Axes are the joint's local X, Y, Z (Euler XYZ after the rest rotation, as
+// random_pose applies them); an absent axis is fixed at 0.
+#include <string>
+#include <vector>
+
+#include "gatcore/character/rig/motion.hpp"
+#include "gatcore/character/rig/skeleton.hpp"
+
+namespace gatcore::character {
+
+struct JointLimitRule {
+  std::string pattern;  // glob on normalised names: '*' any run, '?' one character
+  JointLimit degrees;   // lo / hi per axis, in degrees
+};
+
+struct JointLimitTable {
+  std::string name = "custom";  // "humanoid" for the built-in table, else the file it came from
+  JointLimit fallback_degrees;  // joints no rule matches
+  std::vector<JointLimitRule> rules;
+
+  // Quaternius / Blender-style humanoids (bones along local +Y: Y = twist;
+  // hinge joints bend about local X): spine, neck, head, shoulders, arms,
+  // elbows and knees as hinges, wrists, fingers, legs, feet, toes; +-10 deg
+  // on every axis for anything else.
+  static JointLimitTable default_humanoid();
+  // Radians per joint of `s` (roots at rest); the rule (or the fallback)
+  // used for each joint is reported in `matched` if given.
+  std::vector<JointLimit> limits_for(const Skeleton& s, std::vector<std::string>* matched = nullptr) const;
+};
+
+// Glob match ('*', '?') of a whole string.
+bool glob_match(const std::string& pattern, const std::string& text);
+
+// Parses a table from JSON text; `source` names it in errors (the file),
+// which also name the field and the bad value.
+JointLimitTable parse_joint_limits(const std::string& json_text, const std::string& source);
+// Reads a file; "humanoid" gives the built-in default table.
+JointLimitTable load_joint_limits(const std::string& path_or_builtin);
+// The table as JSON text (the format above; parse_joint_limits reads it back).
+std::string joint_limits_json(const JointLimitTable& t);
+
+}  // namespace gatcore::character

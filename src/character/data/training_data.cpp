@@ -1,0 +1,152 @@
+#include "gatcore/character/data/training_data.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+
+#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/error.hpp"
+
+namespace gatcore::character {
+
+const char* dataset_part_name(DatasetPart p) {
+  switch (p) {
+    case DatasetPart::train: return "train";
+    case DatasetPart::validation: return "validation";
+    case DatasetPart::test: return "test";
+  }
+  return "?";
+}
+
+const std::vector<std::int32_t>& TrainingData::part(DatasetPart p) const {
+  switch (p) {
+    case DatasetPart::validation: return description.split.validation;
+    case DatasetPart::test: return description.split.test;
+    default: return description.split.train;
+  }
+}
+
+std::int64_t TrainingData::feature_dim(models::Task task) const {
+  const auto S = static_cast<std::int64_t>(description.distortion_scales.size());
+  return 6 + super.num_bones() + (task == models::Task::displacement ? 3 * S : 0);
+}
+
+std::string file_hash(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  GATCORE_CHECK(f.good(), path, ": cannot open file");
+  std::uint64_t h = 1469598103934665603ull;
+  for (std::istreambuf_iterator<char> it(f), end; it != end; ++it) {
+    h ^= static_cast<unsigned char>(*it);
+    h *= 1099511628211ull;
+  }
+  char b[17];
+  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(h));
+  return b;
+}
+
+TrainingData load_training_data(const std::string& path) {
+  TrainingData t;
+  t.path = path;
+  t.description = load_dataset(path);
+  t.hash = file_hash(path);
+  const DatasetDescription& d = t.description;
+  GATCORE_CHECK(!d.characters.empty(), path, ": the dataset has no characters");
+  for (const std::string& e : d.characters) {
+    try {
+      t.characters.push_back(prepare_character(load_dataset_character(e), d.delta_mush, d.distortion_scales));
+    } catch (const std::exception& ex) {
+      throw InvalidArgument(detail::cat(path, ": character '", e, "': ", ex.what()));
+    }
+  }
+  for (const std::string& m : d.motions) {
+    try {
+      t.motions.push_back(load_bvh(m));
+    } catch (const std::exception& ex) {
+      throw InvalidArgument(detail::cat(path, ": motion '", m, "': ", ex.what()));
+    }
+  }
+  std::vector<const Skeleton*> sk;
+  for (const auto& pc : t.characters) sk.push_back(&pc.character.skeleton);
+  t.super = build_super_skeleton(sk);
+  return t;
+}
+
+std::string joined_bone_names(const SuperSkeleton& s) {
+  std::string r;
+  for (const auto& n : s.names) r += (r.empty() ? "" : ",") + n;
+  return r;
+}
+
+namespace {
+
+// [m, 6 + J] in the character's joint order -> [m, 6 + B] in the super skeleton's.
+Tensor to_super_columns(const Tensor& f, const std::vector<std::int32_t>& joint_to_bone, std::int32_t B) {
+  Tensor out = Tensor::zeros(f.rows(), 6 + B);
+  for (std::int64_t i = 0; i < f.rows(); ++i) {
+    for (int c = 0; c < 6; ++c) out.at(i, c) = f.at(i, c);
+    for (std::size_t j = 0; j < joint_to_bone.size(); ++j) out.at(i, 6 + joint_to_bone[j]) = f.at(i, 6 + std::int64_t(j));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<models::Sample> training_samples(const TrainingData& data, models::Task task, DatasetPart part,
+                                             int epoch, int geodesic_k, int max_poses_per_character) {
+  const auto& chars = data.part(part);
+  const std::int32_t B = data.super.num_bones();
+  std::vector<models::Sample> out;
+  if (task == models::Task::displacement) {
+    std::vector<SampleTask> tasks = dataset_tasks(data.description, data.characters, data.motions, chars, epoch);
+    if (max_poses_per_character > 0)
+      std::erase_if(tasks, [&](const SampleTask& t) { return t.pose_index >= max_poses_per_character; });
+    // One shared graph per character when samples cover the whole mesh.
+    stream_densegats_samples(data.characters, tasks, [&](DenseGatsSample&& s) {
+      models::Sample m;
+      m.name = data.description.characters[std::size_t(s.character)] + " pose " + std::to_string(s.pose);
+      m.features = densegats_model_features(
+          to_super_columns(s.features, data.super.joint_to_bone[std::size_t(s.character)], B), s);
+      m.target = std::move(s.target);
+      m.graph = share(std::move(s.graph));
+      out.push_back(std::move(m));
+    });
+    return out;
+  }
+  GATCORE_CHECK(geodesic_k >= 1, "training_samples: geodesic_k must be >= 1, got ", geodesic_k);
+  for (std::int32_t c : chars) {
+    const PreparedCharacter& pc = data.characters[std::size_t(c)];
+    NeuroSkinningSample s = make_neuroskinning_sample(pc);
+    const auto& j2b = data.super.joint_to_bone[std::size_t(c)];
+    models::Sample m;
+    m.name = data.description.characters[std::size_t(c)];
+    m.features = to_super_columns(s.features, j2b, B);
+    const std::vector<float> w = super_weights(pc.character.mesh.weights, j2b, B);
+    m.target = Tensor::empty(s.weights.rows(), B);
+    for (std::int64_t i = 0; i < m.target.rows(); ++i)
+      for (std::int32_t b = 0; b < B; ++b) m.target.at(i, b) = w[std::size_t(i * B + b)];
+    m.bone_mask = Tensor::empty(1, B);
+    for (std::int32_t b = 0; b < B; ++b) m.bone_mask.at(0, b) = data.super.mask[std::size_t(c)][std::size_t(b)] ? 1.f : 0.f;
+    m.graph = share(std::move(s.graph));
+    m.geodesic_neighbours = geodesic_knn_lists(pc.character.mesh.positions, pc.character.mesh.triangles, geodesic_k);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+models::Sample densegats_full_sample(const TrainingData& data, std::int32_t character, const Pose& pose,
+                                     DenseGatsSample* raw) {
+  GATCORE_CHECK(character >= 0 && character < static_cast<std::int32_t>(data.characters.size()),
+                "densegats_full_sample: character ", character, " of ", data.characters.size());
+  DenseGatsSample s = make_densegats_sample(data.characters[std::size_t(character)], pose, 0, 0);
+  models::Sample m;
+  m.name = data.description.characters[std::size_t(character)];
+  m.features = densegats_model_features(
+      to_super_columns(s.features, data.super.joint_to_bone[std::size_t(character)], data.super.num_bones()), s);
+  m.target = s.target;
+  m.graph = share(std::move(s.graph));
+  if (raw) *raw = std::move(s);
+  return m;
+}
+
+}  // namespace gatcore::character

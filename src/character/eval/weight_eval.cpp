@@ -1,0 +1,213 @@
+#include "gatcore/character/eval/weight_eval.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+
+#include <nlohmann/json.hpp>
+
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/rig/motion.hpp"
+#include "gatcore/error.hpp"
+
+namespace gatcore::character {
+
+SkinWeights weights_from_super(std::span<const float> dense, std::int64_t num_bones,
+                               const std::vector<std::int32_t>& joint_to_bone) {
+  GATCORE_CHECK(num_bones > 0 && dense.size() % static_cast<std::size_t>(num_bones) == 0, "weights_from_super: ",
+                dense.size(), " weights for ", num_bones, " bones");
+  std::vector<std::int32_t> bone_to_joint(static_cast<std::size_t>(num_bones), -1);
+  for (std::size_t j = 0; j < joint_to_bone.size(); ++j) {
+    const std::int32_t b = joint_to_bone[j];
+    GATCORE_CHECK(b >= 0 && b < num_bones, "weights_from_super: joint ", j, " maps to bone ", b, " of ", num_bones);
+    GATCORE_CHECK(bone_to_joint[b] < 0, "weights_from_super: joints ", bone_to_joint[b], " and ", j,
+                  " both map to bone ", b);
+    bone_to_joint[b] = static_cast<std::int32_t>(j);
+  }
+  const std::int64_t n = static_cast<std::int64_t>(dense.size()) / num_bones;
+  SkinWeights w;
+  w.ptr.reserve(static_cast<std::size_t>(n) + 1);
+  std::vector<std::pair<std::int32_t, float>> row;
+  for (std::int64_t v = 0; v < n; ++v) {
+    row.clear();
+    double sum = 0;
+    for (std::int64_t b = 0; b < num_bones; ++b) {
+      const float x = dense[static_cast<std::size_t>(v * num_bones + b)];
+      GATCORE_CHECK(std::isfinite(x), "weights_from_super: vertex ", v, " bone ", b, " weight is not finite");
+      if (x > 0.0f && bone_to_joint[b] >= 0) {
+        row.push_back({bone_to_joint[b], x});
+        sum += x;
+      }
+    }
+    std::sort(row.begin(), row.end());
+    for (const auto& [j, x] : row) {
+      w.joint.push_back(j);
+      w.weight.push_back(static_cast<float>(x / sum));
+    }
+    w.ptr.push_back(static_cast<std::int64_t>(w.joint.size()));
+  }
+  return w;
+}
+
+CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std::span<const float> predicted,
+                                               std::span<const float> truth, std::int64_t num_bones,
+                                               const std::vector<std::int32_t>& joint_to_bone,
+                                               std::span<const std::uint8_t> mask, const WeightEvalOptions& opts,
+                                               std::int32_t character_index) {
+  const Mesh& mesh = pc.character.mesh;
+  const std::int64_t n = mesh.num_vertices();
+  GATCORE_CHECK(static_cast<std::int64_t>(predicted.size()) == n * num_bones &&
+                    static_cast<std::int64_t>(truth.size()) == n * num_bones,
+                "evaluate_character_weights: ", predicted.size(), " predicted and ", truth.size(),
+                " true weights for ", n, " vertices x ", num_bones, " bones");
+  GATCORE_CHECK(static_cast<std::int32_t>(joint_to_bone.size()) == pc.character.skeleton.num_joints(),
+                "evaluate_character_weights: joint_to_bone has ", joint_to_bone.size(), " entries for ",
+                pc.character.skeleton.num_joints(), " joints");
+  GATCORE_CHECK(opts.poses >= 0 && opts.worst >= 1, "evaluate_character_weights: poses ", opts.poses, ", worst ",
+                opts.worst);
+  GATCORE_CHECK(pc.norm.scale > 0.0f && std::isfinite(pc.norm.scale), "evaluate_character_weights: character scale ",
+                pc.norm.scale);
+  CharacterWeightEval r;
+  r.vertices = n;
+  r.height = 1.0 / static_cast<double>(pc.norm.scale);
+  r.weights = weight_metrics(predicted, truth, num_bones, opts.threshold, mask);
+  r.vertex_l1.resize(static_cast<std::size_t>(n));
+  for (std::int64_t v = 0; v < n; ++v) {
+    double l1 = 0;
+    for (std::int64_t b = 0; b < num_bones; ++b) {
+      if (!mask.empty() && !mask[static_cast<std::size_t>(b)]) continue;
+      const std::size_t i = static_cast<std::size_t>(v * num_bones + b);
+      l1 += std::abs(static_cast<double>(predicted[i]) - truth[i]);
+    }
+    r.vertex_l1[static_cast<std::size_t>(v)] = static_cast<float>(l1);
+  }
+  if (opts.poses > 0) {
+    const Skeleton& sk = pc.character.skeleton;
+    const auto limits = uniform_limits(sk, opts.pose_angle);
+    std::mt19937 rng(opts.seed ^ (0x9e3779b9u * static_cast<std::uint32_t>(character_index + 1)));
+    std::vector<Pose> poses;
+    for (int p = 0; p < opts.poses; ++p) poses.push_back(random_pose(sk, pc.rest, limits, rng));
+    r.deformation = deformation_error(pc, weights_from_super(predicted, num_bones, joint_to_bone),
+                                      weights_from_super(truth, num_bones, joint_to_bone), poses, opts.worst);
+  }
+  return r;
+}
+
+DistanceStats deformation_error(const PreparedCharacter& pc, const SkinWeights& predicted, const SkinWeights& truth,
+                                std::span<const Pose> poses, int worst) {
+  const std::int64_t n = pc.character.mesh.num_vertices();
+  GATCORE_CHECK(predicted.num_vertices() == n && truth.num_vertices() == n, "deformation_error: ",
+                predicted.num_vertices(), " predicted and ", truth.num_vertices(), " true weight rows for ", n,
+                " vertices");
+  GATCORE_CHECK(pc.norm.scale > 0.0f && std::isfinite(pc.norm.scale), "deformation_error: character scale ",
+                pc.norm.scale);
+  Mesh pred = pc.character.mesh, gt = pc.character.mesh;
+  pred.weights = predicted;
+  gt.weights = truth;
+  const Skeleton& sk = pc.character.skeleton;
+  std::vector<std::vector<float>> distances(poses.size());
+  for (std::size_t p = 0; p < poses.size(); ++p) {
+    const std::vector<Mat4> m = skinning_matrices(sk, poses[p]);
+    const std::vector<float> a = linear_blend_skinning(pred, m), b = linear_blend_skinning(gt, m);
+    auto& d = distances[p];
+    d.resize(static_cast<std::size_t>(n));
+    for (std::int64_t v = 0; v < n; ++v) {
+      const std::size_t i = static_cast<std::size_t>(3 * v);
+      const double dx = a[i] - b[i], dy = a[i + 1] - b[i + 1], dz = a[i + 2] - b[i + 2];
+      d[static_cast<std::size_t>(v)] = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+  }
+  return worst_poses_error(distances, 1.0 / static_cast<double>(pc.norm.scale), worst);
+}
+
+WeightEvalSummary summarise_weight_eval(const std::vector<CharacterWeightEval>& per_character) {
+  WeightEvalSummary s;
+  s.characters = static_cast<int>(per_character.size());
+  for (const auto& c : per_character) {
+    s.precision += c.weights.precision;
+    s.recall += c.weights.recall;
+    s.l1_mean += c.weights.l1_mean;
+    s.deform_mean += c.deformation.mean;
+    s.l1_max = std::max(s.l1_max, c.weights.l1_max);
+    s.deform_max = std::max(s.deform_max, c.deformation.max);
+  }
+  if (s.characters > 0) {
+    const double k = static_cast<double>(s.characters);
+    s.precision /= k, s.recall /= k, s.l1_mean /= k, s.deform_mean /= k;
+  }
+  return s;
+}
+
+namespace {
+
+std::string fmt(const char* f, double x) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, x);
+  return b;
+}
+
+std::string row(const std::string& name, const std::string& vertices, double p, double r, double l1m, double l1x,
+                double dm, double dx) {
+  return "| " + name + " | " + vertices + " | " + fmt("%.3f", p) + " | " + fmt("%.3f", r) + " | " +
+         fmt("%.4f", l1m) + " | " + fmt("%.4f", l1x) + " | " + fmt("%.5f", dm) + " | " + fmt("%.4f", dx) + " |\n";
+}
+
+}  // namespace
+
+std::string weight_eval_markdown(const std::vector<CharacterWeightEval>& per_character) {
+  std::string s =
+      "| character | vertices | precision | recall | L1 mean | L1 max | deform. mean / height | deform. max / height |\n"
+      "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const auto& c : per_character)
+    s += row(c.name, std::to_string(c.vertices), c.weights.precision, c.weights.recall, c.weights.l1_mean,
+             c.weights.l1_max, c.deformation.mean, c.deformation.max);
+  const WeightEvalSummary o = summarise_weight_eval(per_character);
+  s += row("**overall**", "", o.precision, o.recall, o.l1_mean, o.l1_max, o.deform_mean, o.deform_max);
+  return s;
+}
+
+std::string weight_eval_json(const std::string& method, const std::vector<CharacterWeightEval>& per_character,
+                             const WeightEvalOptions& opts) {
+  nlohmann::json j;
+  j["method"] = method;
+  j["options"] = {{"poses", opts.poses},   {"pose_angle", opts.pose_angle}, {"seed", opts.seed},
+                  {"threshold", opts.threshold}, {"worst", opts.worst}};
+  j["characters"] = nlohmann::json::array();
+  for (const auto& c : per_character)
+    j["characters"].push_back({{"name", c.name},
+                               {"vertices", c.vertices},
+                               {"height", c.height},
+                               {"precision", c.weights.precision},
+                               {"recall", c.weights.recall},
+                               {"l1_mean", c.weights.l1_mean},
+                               {"l1_max", c.weights.l1_max},
+                               {"deform_mean", c.deformation.mean},
+                               {"deform_max", c.deformation.max}});
+  const WeightEvalSummary o = summarise_weight_eval(per_character);
+  j["overall"] = {{"characters", o.characters}, {"precision", o.precision},     {"recall", o.recall},
+                  {"l1_mean", o.l1_mean},       {"l1_max", o.l1_max},           {"deform_mean", o.deform_mean},
+                  {"deform_max", o.deform_max}};
+  return j.dump(2) + "\n";
+}
+
+void write_text_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
+    GATCORE_CHECK(os.good(), path, ": cannot open '", tmp, "' for writing");
+    os.write(text.data(), static_cast<std::streamsize>(text.size()));
+    os.flush();
+    if (!os.good()) {
+      std::remove(tmp.c_str());
+      throw InvalidArgument(detail::cat(path, ": write to '", tmp, "' failed (disk full?)"));
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw InvalidArgument(detail::cat(path, ": cannot rename '", tmp, "' to it"));
+  }
+}
+
+}  // namespace gatcore::character

@@ -1,0 +1,61 @@
+#include "gatcore/character/inference/corrective.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "gatcore/error.hpp"
+#include "gatcore/models/train.hpp"
+
+namespace gatcore::character {
+
+CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
+                                            const BoneAliases& aliases, std::span<const int> distortion_scales) {
+  CorrectiveDeformer d;
+  // No Delta Mush smoothing (iterations 0): only its one-ring adjacency is
+  // used (distortion columns), with the mesh graph and the normalisation.
+  d.prepared = prepare_character(ch, DeltaMushParams{0, 0.5f}, distortion_scales);
+  d.mapping = map_bones(ch.skeleton, bones, aliases, ch.name);
+  d.num_bones = static_cast<std::int64_t>(bones.size());
+  return d;
+}
+
+CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, const models::Normaliser& norm,
+                            const Pose& pose) {
+  GATCORE_CHECK(model.config().task == models::Task::displacement, d.prepared.character.name, ": ",
+                model.config().name, " predicts skin weights, not displacements");
+  const PreparedCharacter& pc = d.prepared;
+  const auto t0 = std::chrono::steady_clock::now();
+  // The whole-mesh sample of training, without its Delta Mush target.
+  DenseGatsSample ds = make_densegats_sample(pc, pose, 0, 0, /*with_target=*/false);
+  models::Sample s;
+  s.name = pc.character.name;
+  s.features = densegats_model_features(features_in_bone_order(ds.features, d.mapping), ds);
+  GATCORE_CHECK(s.features.cols() == model.config().in_dim, s.name, ": ", s.features.cols(),
+                " features (bones and distortion scales) for a model that takes ", model.config().in_dim);
+  s.graph = share(std::move(ds.graph));
+  const auto t1 = std::chrono::steady_clock::now();
+  const Tensor y = models::predict(model, s, norm);
+  const auto t2 = std::chrono::steady_clock::now();
+  CorrectedFrame f;
+  const std::int64_t n = ds.lbs.rows();
+  f.lbs.resize(static_cast<std::size_t>(3 * n));
+  f.corrected.resize(f.lbs.size());
+  // Normalised p' = (p - origin) * scale: back to world units.
+  const float inv = 1.0f / pc.norm.scale;
+  for (std::int64_t v = 0; v < n; ++v) {
+    // The model predicts in the root frame (make_densegats_sample).
+    const Vec3 o = root_offset_to_world(ds, {y.at(v, 0), y.at(v, 1), y.at(v, 2)});
+    for (int c = 0; c < 3; ++c) {
+      const float l = ds.lbs.at(v, c) * inv + pc.norm.origin[c];
+      const float off = o[std::size_t(c)] * inv;
+      GATCORE_CHECK(std::isfinite(off), s.name, ": the model predicted a non-finite offset at vertex ", v);
+      f.lbs[3 * v + c] = l;
+      f.corrected[3 * v + c] = l + off;
+    }
+  }
+  f.ms_features = std::chrono::duration<double, std::milli>(t1 - t0).count();
+  f.ms_inference = std::chrono::duration<double, std::milli>(t2 - t1).count();
+  return f;
+}
+
+}  // namespace gatcore::character

@@ -1,0 +1,66 @@
+#include "gatcore/character/inference/weight_prediction.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/features/features.hpp"
+#include "gatcore/error.hpp"
+#include "gatcore/models/train.hpp"
+
+namespace gatcore::character {
+
+WeightPrediction predict_skin_weights(models::Model& model, const models::Normaliser& norm,
+                                      const std::vector<std::string>& bones, const Character& ch, int max_influences,
+                                      const BoneAliases& aliases) {
+  GATCORE_CHECK(model.config().task == models::Task::weights, ch.name, ": ", model.config().name,
+                " predicts displacements, not skin weights");
+  GATCORE_CHECK(max_influences >= 1, "predict_skin_weights: max_influences must be >= 1, got ", max_influences);
+  const auto t0 = std::chrono::steady_clock::now();
+  WeightPrediction out;
+  out.mapping = map_bones(ch.skeleton, bones, aliases, ch.name);
+  const auto B = static_cast<std::int64_t>(bones.size());
+  const PreparedCharacter pc = prepare_character(ch, DeltaMushParams{0, 0.5f});  // no smoothing needed here
+  NeuroSkinningSample ns = make_neuroskinning_sample(pc);
+  models::Sample s;
+  s.name = ch.name;
+  s.features = features_in_bone_order(ns.features, out.mapping);
+  s.graph = share(std::move(ns.graph));
+  int k = 1;
+  for (int p : model.pool_sizes()) k = std::max(k, p);
+  if (!model.pool_sizes().empty())
+    s.geodesic_neighbours = geodesic_knn_lists(pc.character.mesh.positions, pc.character.mesh.triangles, k);
+  s.bone_mask = Tensor::zeros(1, B);
+  for (std::int64_t b = 0; b < B; ++b) s.bone_mask.at(0, b) = out.mapping.bone_to_joint[b] >= 0 ? 1.f : 0.f;
+  const auto t1 = std::chrono::steady_clock::now();
+  const Tensor y = models::predict(model, s, norm, max_influences);
+  const auto t2 = std::chrono::steady_clock::now();
+
+  const std::int64_t n = y.rows();
+  SkinWeights& w = out.weights;
+  w.ptr.assign(1, 0);
+  for (std::int64_t v = 0; v < n; ++v) {
+    std::vector<std::pair<std::int32_t, float>> row;
+    for (std::int64_t b = 0; b < B; ++b) {
+      const float p = y.at(v, b);
+      GATCORE_CHECK(std::isfinite(p), ch.name, ": the model predicted a non-finite weight at vertex ", v);
+      // Masked bones have probability exactly 0, so every kept bone has a joint.
+      if (p > 0.f && out.mapping.bone_to_joint[b] >= 0) row.push_back({out.mapping.bone_to_joint[b], p});
+    }
+    std::sort(row.begin(), row.end());
+    float sum = 0.f;
+    for (const auto& e : row) sum += e.second;
+    GATCORE_CHECK(sum > 0.f, ch.name, ": vertex ", v, " got no weight on any of its joints");
+    for (const auto& e : row) {
+      w.joint.push_back(e.first);
+      w.weight.push_back(e.second / sum);
+    }
+    w.ptr.push_back(static_cast<std::int64_t>(w.joint.size()));
+  }
+  out.seconds_features = std::chrono::duration<double>(t1 - t0).count();
+  out.seconds_inference = std::chrono::duration<double>(t2 - t1).count();
+  return out;
+}
+
+}  // namespace gatcore::character

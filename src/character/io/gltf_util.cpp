@@ -1,0 +1,127 @@
+#include "src/character/io/gltf_util.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+#include "gatcore/error.hpp"
+
+namespace gatcore::character::gltf_util {
+
+bool is_glb(const std::string& p) {
+  return p.size() >= 4 && (p.compare(p.size() - 4, 4, ".glb") == 0 || p.compare(p.size() - 4, 4, ".GLB") == 0);
+}
+
+tinygltf::Model read_model(const std::string& path) {
+  tinygltf::Model model;
+  tinygltf::TinyGLTF gltf;
+  // Images are carried through untouched, never decoded.
+  gltf.SetImageLoader(
+      [](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+        return true;
+      },
+      nullptr);
+  std::string err, warn;
+  const bool ok = is_glb(path) ? gltf.LoadBinaryFromFile(&model, &err, &warn, path)
+                               : gltf.LoadASCIIFromFile(&model, &err, &warn, path);
+  GATCORE_CHECK(ok, path, ": cannot read the glTF file: ", err);
+  if (model.buffers.empty()) model.buffers.emplace_back();
+  return model;
+}
+
+int append_accessor(tinygltf::Model& m, const void* data, std::size_t bytes, int component_type, int type,
+                    std::size_t count) {
+  if (m.buffers.empty()) m.buffers.emplace_back();
+  auto& buf = m.buffers[0].data;
+  while (buf.size() % 4) buf.push_back(0);
+  tinygltf::BufferView v;
+  v.buffer = 0;
+  v.byteOffset = buf.size();
+  v.byteLength = bytes;
+  const auto* p = static_cast<const unsigned char*>(data);
+  buf.insert(buf.end(), p, p + bytes);
+  m.bufferViews.push_back(v);
+  tinygltf::Accessor a;
+  a.bufferView = static_cast<int>(m.bufferViews.size()) - 1;
+  a.componentType = component_type;
+  a.type = type;
+  a.count = count;
+  m.accessors.push_back(a);
+  return static_cast<int>(m.accessors.size()) - 1;
+}
+
+int append_vec3(tinygltf::Model& m, const std::vector<float>& xyz) {
+  const std::size_t n = xyz.size() / 3;
+  std::vector<double> lo(3, n ? std::numeric_limits<double>::max() : 0.0), hi(3, n ? -std::numeric_limits<double>::max() : 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = std::min<double>(lo[c], xyz[3 * i + c]);
+      hi[c] = std::max<double>(hi[c], xyz[3 * i + c]);
+    }
+  const int a = append_accessor(m, xyz.data(), xyz.size() * sizeof(float), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                TINYGLTF_TYPE_VEC3, n);
+  m.accessors[a].minValues = lo;
+  m.accessors[a].maxValues = hi;
+  return a;
+}
+
+Mat4 node_matrix(const tinygltf::Node& n) {
+  if (n.matrix.size() == 16) {
+    Mat4 m;
+    for (int i = 0; i < 16; ++i) m[i] = static_cast<float>(n.matrix[i]);
+    return m;
+  }
+  Transform t;
+  if (n.translation.size() == 3)
+    for (int i = 0; i < 3; ++i) t.translation[i] = static_cast<float>(n.translation[i]);
+  if (n.rotation.size() == 4)
+    for (int i = 0; i < 4; ++i) t.rotation[i] = static_cast<float>(n.rotation[i]);
+  if (n.scale.size() == 3)
+    for (int i = 0; i < 3; ++i) t.scale[i] = static_cast<float>(n.scale[i]);
+  return to_matrix(t);
+}
+
+std::vector<Mat4> node_globals(const tinygltf::Model& m, const std::string& file) {
+  const int n = static_cast<int>(m.nodes.size());
+  std::vector<int> parent(n, -1);
+  for (int i = 0; i < n; ++i)
+    for (int c : m.nodes[i].children) {
+      GATCORE_CHECK(c >= 0 && c < n && parent[c] < 0, file, ": node ", i, " has a bad or shared child ", c);
+      parent[c] = i;
+    }
+  std::vector<Mat4> g(n);
+  std::vector<char> state(n, 0);  // 0 todo, 1 in progress, 2 done
+  for (int i = 0; i < n; ++i) {
+    std::vector<int> chain;
+    for (int x = i; x >= 0 && state[x] != 2; x = parent[x]) {
+      GATCORE_CHECK(state[x] == 0, file, ": the node hierarchy has a cycle at node ", x);
+      state[x] = 1;
+      chain.push_back(x);
+    }
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+      const int x = *it;
+      g[x] = parent[x] >= 0 ? mul(g[parent[x]], node_matrix(m.nodes[x])) : node_matrix(m.nodes[x]);
+      state[x] = 2;
+    }
+  }
+  return g;
+}
+
+void write_model_atomic(tinygltf::Model& m, const std::string& path) {
+  const std::string tmp = path + ".tmp";
+  tinygltf::TinyGLTF gltf;
+  const bool ok = gltf.WriteGltfSceneToFile(&m, tmp, true, true, !is_glb(path), is_glb(path));
+  if (!ok) {
+    std::remove(tmp.c_str());
+    throw InvalidArgument(detail::cat(path, ": cannot write the file (through '", tmp, "')"));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw InvalidArgument(detail::cat(path, ": cannot rename '", tmp, "' to it: ", why));
+  }
+}
+
+}  // namespace gatcore::character::gltf_util

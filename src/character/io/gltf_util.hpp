@@ -1,0 +1,39 @@
+#pragma once
+// Internal helpers shared by the glTF writers (weights, whole characters,
+// baked morph-target animations): reading a source file back, appending
+// accessors to buffer 0, node matrices, and atomic writes.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <tiny_gltf.h>
+
+#include "gatcore/character/rig/transform.hpp"
+
+namespace gatcore::character::gltf_util {
+
+bool is_glb(const std::string& path);
+// Reads a .glb / .gltf without decoding images; throws naming the file.
+tinygltf::Model read_model(const std::string& path);
+// Accessor `accessor` as count x comps finite floats (any component type,
+// strides, sparse); throws naming `file` and `what` (implemented with the
+// importer's reader in gltf.cpp).
+std::vector<float> read_floats(const tinygltf::Model& m, int accessor, int comps, const std::string& what,
+                               const std::string& file);
+// Appends `bytes` as a new buffer view of buffer 0 and an accessor over it.
+int append_accessor(tinygltf::Model& m, const void* data, std::size_t bytes, int component_type, int type,
+                    std::size_t count);
+// Float VEC3 accessor with the min / max glTF requires for POSITION data.
+int append_vec3(tinygltf::Model& m, const std::vector<float>& xyz);
+// The node's local matrix (matrix, else TRS).
+Mat4 node_matrix(const tinygltf::Node& n);
+// Global rest matrices of every node (throws on cycles / bad children).
+std::vector<Mat4> node_globals(const tinygltf::Model& m, const std::string& file);
+// Writes `m` to "<path>.tmp" (binary for .glb, JSON with embedded buffers
+// otherwise) and renames it over `path`: a failed write leaves no partial file.
+void write_model_atomic(tinygltf::Model& m, const std::string& path);
+
+}  // namespace gatcore::character::gltf_util

@@ -1,0 +1,215 @@
+// Per-joint rotation limit tables (JSON through nlohmann-json).
+#include "gatcore/character/rig/joint_limits.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "gatcore/character/rig/super_skeleton.hpp"
+#include "gatcore/error.hpp"
+
+namespace gatcore::character {
+
+namespace {
+
+JointLimit deg(float xlo, float xhi, float ylo, float yhi, float zlo, float zhi) {
+  JointLimit l;
+  l.lo = {xlo, ylo, zlo};
+  l.hi = {xhi, yhi, zhi};
+  return l;
+}
+
+constexpr const char* kAxes[3] = {"x", "y", "z"};
+
+// One limit object {"x": [lo, hi], ...}; absent axes are fixed at 0.
+JointLimit parse_limit(const nlohmann::json& j, const std::string& source, const std::string& where) {
+  GATCORE_CHECK(j.is_object(), source, ": ", where, ": expected an object with \"x\", \"y\", \"z\" ranges, got ",
+                j.dump());
+  JointLimit l;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& k = it.key();
+    GATCORE_CHECK(k == "x" || k == "y" || k == "z" || k == "match", source, ": ", where, ": unknown field \"", k, "\"");
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (!j.contains(kAxes[a])) continue;
+    const nlohmann::json& r = j.at(kAxes[a]);
+    const std::string field = where + "." + kAxes[a];
+    GATCORE_CHECK(r.is_array() && r.size() == 2 && r[0].is_number() && r[1].is_number(), source, ": ", field,
+                  ": expected [min, max] in degrees, got ", r.dump());
+    const double lo = r[0].get<double>(), hi = r[1].get<double>();
+    GATCORE_CHECK(std::isfinite(lo) && std::isfinite(hi) && lo >= -180.0 && hi <= 180.0, source, ": ", field,
+                  ": angles must be finite degrees in [-180, 180], got ", r.dump());
+    GATCORE_CHECK(lo <= hi, source, ": ", field, ": min ", lo, " is above max ", hi);
+    l.lo[a] = static_cast<float>(lo);
+    l.hi[a] = static_cast<float>(hi);
+  }
+  return l;
+}
+
+nlohmann::json limit_json(const JointLimit& l) {
+  nlohmann::json j = nlohmann::json::object();
+  for (int a = 0; a < 3; ++a) j[kAxes[a]] = {l.lo[a], l.hi[a]};
+  return j;
+}
+
+}  // namespace
+
+bool glob_match(const std::string& p, const std::string& s) {
+  // Iterative matcher with backtracking to the last '*'.
+  std::size_t i = 0, j = 0, star = std::string::npos, mark = 0;
+  while (j < s.size()) {
+    if (i < p.size() && (p[i] == '?' || p[i] == s[j])) {
+      ++i, ++j;
+    } else if (i < p.size() && p[i] == '*') {
+      star = i++;
+      mark = j;
+    } else if (star != std::string::npos) {
+      i = star + 1;
+      j = ++mark;
+    } else {
+      return false;
+    }
+  }
+  while (i < p.size() && p[i] == '*') ++i;
+  return i == p.size();
+}
+
+JointLimitTable JointLimitTable::default_humanoid() {
+  // Degrees. Bones run along local +Y (Blender / FBX2glTF convention), so Y is
+  // the twist about the bone; X is flexion / extension and Z abduction for
+  // most joints. Hinges bend one way only, in the direction measured on the
+  // Quaternius rigs (test_character_joint_limits checks that knee flexion
+  // moves the ankle backwards, elbow flexion the wrist forwards, and that
+  // the upper-arm range reaches arms-down).
+  JointLimitTable t;
+  t.name = "humanoid";
+  t.fallback_degrees = deg(-10, 10, -10, 10, -10, 10);
+  auto add = [&](const char* pattern, JointLimit l) { t.rules.push_back({pattern, l}); };
+  add("hips", deg(-10, 10, -15, 15, -8, 8));
+  add("abdomen", deg(-15, 20, -15, 15, -10, 10));
+  add("torso", deg(-10, 15, -15, 15, -10, 10));
+  add("chest", deg(-10, 15, -15, 15, -10, 10));
+  add("spine*", deg(-15, 20, -15, 15, -10, 10));
+  add("neck*", deg(-20, 25, -30, 30, -15, 15));
+  add("head", deg(-20, 25, -40, 40, -15, 15));
+  add("shoulder.*", deg(-10, 10, -5, 5, -12, 12));
+  add("clavicle.*", deg(-10, 10, -5, 5, -12, 12));
+  // The Quaternius rest pose is a T-pose: upper-arm X lowers / raises the arm
+  // (-90 = hanging at the side, where walking and most animation keep it;
+  // both sides alike), Z swings it forwards / backwards.
+  add("upperarm.*", deg(-90, 30, -40, 40, -50, 50));
+  // Elbows bend about local Z on these rigs, in mirrored directions (the
+  // forearm swings forwards); forearm twist about Y.
+  add("lowerarm.l", deg(-5, 5, -40, 40, -130, 0));
+  add("lowerarm.r", deg(-5, 5, -40, 40, 0, 130));
+  add("hand.*", deg(-40, 40, -15, 15, -30, 30));
+  add("thumb*", deg(-15, 15, -10, 10, -15, 15));
+  add("index*", deg(-10, 40, -3, 3, -5, 5));
+  add("middle*", deg(-10, 40, -3, 3, -5, 5));
+  add("ring*", deg(-10, 40, -3, 3, -5, 5));
+  add("pinky*", deg(-10, 40, -3, 3, -5, 5));
+  // Hips: the men's rigs flex about Z (mirrored) and abduct about X, the
+  // women's the other way round, so both axes get the flexion range.
+  add("upperleg.*", deg(-45, 45, -20, 20, -45, 45));
+  add("lowerleg.*", deg(0, 120, -5, 5, -3, 3));  // knees: +X moves the ankle backwards
+  add("foot.*", deg(-25, 25, -10, 10, -10, 10));
+  add("toe*", deg(-20, 30, -3, 3, -3, 3));
+  return t;
+}
+
+std::vector<JointLimit> JointLimitTable::limits_for(const Skeleton& s, std::vector<std::string>* matched) const {
+  constexpr float r = std::numbers::pi_v<float> / 180.0f;
+  std::vector<JointLimit> out(static_cast<std::size_t>(s.num_joints()));
+  if (matched) matched->assign(out.size(), "");
+  for (std::int32_t j = 0; j < s.num_joints(); ++j) {
+    if (s.parents[j] < 0) {
+      if (matched) (*matched)[j] = "(root: rest)";
+      continue;
+    }
+    const std::string n = normalise_bone_name(s.names[j]);
+    const JointLimit* l = &fallback_degrees;
+    std::string which = "(default)";
+    for (const auto& rule : rules)
+      if (glob_match(rule.pattern, n)) {
+        l = &rule.degrees;
+        which = rule.pattern;
+        break;
+      }
+    for (int a = 0; a < 3; ++a) {
+      out[j].lo[a] = l->lo[a] * r;
+      out[j].hi[a] = l->hi[a] * r;
+    }
+    if (matched) (*matched)[j] = which;
+  }
+  return out;
+}
+
+JointLimitTable parse_joint_limits(const std::string& text, const std::string& source) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const std::exception& e) {
+    throw InvalidArgument(detail::cat(source, ": not a JSON joint-limit table: ", e.what()));
+  }
+  GATCORE_CHECK(j.is_object(), source, ": expected a JSON object");
+  GATCORE_CHECK(j.contains("format") && j.at("format") == "gatcore-joint-limits", source,
+                ": field \"format\" must be \"gatcore-joint-limits\", got ",
+                j.contains("format") ? j.at("format").dump() : std::string("nothing"));
+  GATCORE_CHECK(j.contains("version") && j.at("version") == 1, source, ": field \"version\": unsupported value ",
+                j.contains("version") ? j.at("version").dump() : std::string("(missing)"), " (expected 1)");
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& k = it.key();
+    GATCORE_CHECK(k == "format" || k == "version" || k == "name" || k == "default" || k == "joints", source,
+                  ": unknown field \"", k, "\"");
+  }
+  JointLimitTable t;
+  t.name = source;
+  if (j.contains("name")) {
+    GATCORE_CHECK(j.at("name").is_string(), source, ": field \"name\": expected a string, got ", j.at("name").dump());
+    t.name = j.at("name").get<std::string>();
+  }
+  GATCORE_CHECK(j.contains("default"), source, ": missing field \"default\" (limits for joints no rule matches)");
+  t.fallback_degrees = parse_limit(j.at("default"), source, "default");
+  if (j.contains("joints")) {
+    const nlohmann::json& js = j.at("joints");
+    GATCORE_CHECK(js.is_array(), source, ": field \"joints\": expected an array, got ", js.dump());
+    for (std::size_t i = 0; i < js.size(); ++i) {
+      const std::string where = "joints[" + std::to_string(i) + "]";
+      GATCORE_CHECK(js[i].is_object() && js[i].contains("match") && js[i].at("match").is_string() &&
+                        !js[i].at("match").get<std::string>().empty(),
+                    source, ": ", where, ".match: expected a non-empty name pattern, got ",
+                    js[i].is_object() && js[i].contains("match") ? js[i].at("match").dump() : std::string("nothing"));
+      t.rules.push_back({js[i].at("match").get<std::string>(), parse_limit(js[i], source, where)});
+    }
+  }
+  return t;
+}
+
+JointLimitTable load_joint_limits(const std::string& path) {
+  if (path == "humanoid") return JointLimitTable::default_humanoid();
+  std::ifstream f(path);
+  GATCORE_CHECK(f.good(), path, ": cannot open the joint-limit table");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return parse_joint_limits(ss.str(), path);
+}
+
+std::string joint_limits_json(const JointLimitTable& t) {
+  nlohmann::json j;
+  j["format"] = "gatcore-joint-limits";
+  j["version"] = 1;
+  j["name"] = t.name;
+  j["default"] = limit_json(t.fallback_degrees);
+  j["joints"] = nlohmann::json::array();
+  for (const auto& r : t.rules) {
+    nlohmann::json e = limit_json(r.degrees);
+    e["match"] = r.pattern;
+    j["joints"].push_back(e);
+  }
+  return j.dump(2);
+}
+
+}  // namespace gatcore::character

@@ -1,0 +1,89 @@
+#include "gatcore/character/viz/loss_curve.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "gatcore/character/viz/plot.hpp"
+#include "gatcore/error.hpp"
+
+namespace gatcore::character {
+
+std::string format_history(const std::vector<LossRecord>& h) {
+  std::string s;
+  char b[160];
+  for (const LossRecord& r : h) {
+    std::snprintf(b, sizeof b, "%s%d:%.9g:%.9g:%.6g:%.4g", s.empty() ? "" : ";", r.epoch, r.train, r.val, r.lr,
+                  r.seconds);
+    s += b;
+  }
+  return s;
+}
+
+std::vector<LossRecord> parse_history(const std::string& s, const std::string& what) {
+  std::vector<LossRecord> h;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, ';');) {
+    LossRecord r;
+    char tail = 0;
+    if (std::sscanf(item.c_str(), "%d:%lf:%lf:%lf:%lf%c", &r.epoch, &r.train, &r.val, &r.lr, &r.seconds, &tail) != 5)
+      throw InvalidArgument(what + ": malformed loss history entry '" + item + "'");
+    h.push_back(r);
+  }
+  return h;
+}
+
+std::string default_curve_path(const std::string& checkpoint) {
+  const auto slash = checkpoint.find_last_of('/');
+  const auto dot = checkpoint.find_last_of('.');
+  const bool ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
+  return (ext ? checkpoint.substr(0, dot) : checkpoint) + ".loss.png";
+}
+
+std::string history_csv_path(const std::string& png) {
+  if (png.size() > 4 && png.compare(png.size() - 4, 4, ".png") == 0) return png.substr(0, png.size() - 4) + ".csv";
+  return png + ".csv";
+}
+
+void write_loss_outputs(const std::vector<LossRecord>& h, const std::string& png) {
+  const std::string csv = history_csv_path(png), tmp = csv + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::trunc);
+    GATCORE_CHECK(f.good(), csv, ": cannot write the loss history (through '", tmp, "')");
+    f << "epoch,train_loss,val_loss,lr,seconds\n";
+    char b[160], v[40] = "";
+    for (const LossRecord& r : h) {
+      if (r.val >= 0) std::snprintf(v, sizeof v, "%.9g", r.val);
+      else v[0] = 0;  // no validation set: an empty field
+      std::snprintf(b, sizeof b, "%d,%.9g,%s,%.6g,%.4g\n", r.epoch, r.train, v, r.lr, r.seconds);
+      f << b;
+    }
+    f.flush();
+    if (!f.good()) {
+      std::remove(tmp.c_str());
+      throw InvalidArgument(csv + ": cannot write the loss history (disk full?)");
+    }
+  }
+  if (std::rename(tmp.c_str(), csv.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw InvalidArgument(csv + ": cannot rename '" + tmp + "' to it: " + why);
+  }
+  PlotSeries train{"train", {}, {}}, val{"validation", {}, {}};
+  for (const LossRecord& r : h) {
+    train.x.push_back(float(r.epoch));
+    train.y.push_back(float(r.train));
+    if (r.val >= 0) {
+      val.x.push_back(float(r.epoch));
+      val.y.push_back(float(r.val));
+    }
+  }
+  std::vector<PlotSeries> series{train};
+  if (!val.x.empty()) series.push_back(val);
+  write_png(png, plot_series(series));
+}
+
+}  // namespace gatcore::character

@@ -1,0 +1,275 @@
+#include "gatcore/character/viz/render.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+
+#include "gatcore/error.hpp"
+
+namespace gatcore::character {
+
+std::array<std::uint8_t, 3> error_colour(float t) {
+  if (!(t >= 0.0f)) t = 0.0f;
+  t = std::min(t, 1.0f);
+  // Piecewise linear through blue, cyan, green, yellow, red.
+  static const float stops[5][3] = {{0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.9f}, {0.2f, 0.8f, 0.2f}, {0.95f, 0.85f, 0.1f},
+                                    {0.9f, 0.1f, 0.1f}};
+  const float x = t * 4.0f;
+  const int i = std::min(3, static_cast<int>(x));
+  const float u = x - i;
+  std::array<std::uint8_t, 3> c;
+  for (int k = 0; k < 3; ++k)
+    c[k] = static_cast<std::uint8_t>(std::lround(255.0f * (stops[i][k] + u * (stops[i + 1][k] - stops[i][k]))));
+  return c;
+}
+
+namespace {
+
+void put(Image& img, int x, int y, const std::array<std::uint8_t, 3>& c) {
+  if (x < 0 || y < 0 || x >= img.width || y >= img.height) return;
+  const std::size_t i = 3 * (static_cast<std::size_t>(y) * img.width + x);
+  img.rgb[i] = c[0];
+  img.rgb[i + 1] = c[1];
+  img.rgb[i + 2] = c[2];
+}
+
+Image blank(int w, int h) {
+  GATCORE_CHECK(w > 0 && h > 0 && w <= 16384 && h <= 16384, "image size must be in [1, 16384], got ", w, "x", h);
+  Image img;
+  img.width = w;
+  img.height = h;
+  img.rgb.assign(static_cast<std::size_t>(w) * h * 3, 255);
+  return img;
+}
+
+void line(Image& img, float x0, float y0, float x1, float y1, const std::array<std::uint8_t, 3>& c) {
+  const int steps = static_cast<int>(std::max(std::abs(x1 - x0), std::abs(y1 - y0))) + 1;
+  for (int s = 0; s <= steps; ++s) {
+    const float t = static_cast<float>(s) / steps;
+    const int x = static_cast<int>(std::lround(x0 + t * (x1 - x0))), y = static_cast<int>(std::lround(y0 + t * (y1 - y0)));
+    put(img, x, y, c);
+    put(img, x, y + 1, c);
+  }
+}
+
+}  // namespace
+
+Image render_error_map(std::span<const float> positions, std::span<const std::int32_t> triangles,
+                       std::span<const float> error, const RenderOptions& opt) {
+  GATCORE_CHECK(positions.size() % 3 == 0 && triangles.size() % 3 == 0 && error.size() == positions.size() / 3,
+                "render_error_map: ", positions.size() / 3, " vertices, ", error.size(), " errors");
+  Image img = blank(opt.width, opt.height);
+  const std::int64_t n = static_cast<std::int64_t>(error.size());
+  if (n == 0) return img;
+  auto norm = [](Vec3 v) {
+    const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    GATCORE_CHECK(l > 0.0f, "render_error_map: zero view or up vector");
+    return Vec3{v[0] / l, v[1] / l, v[2] / l};
+  };
+  const Vec3 f = norm(opt.view_dir);
+  const Vec3 r = norm({f[1] * opt.up[2] - f[2] * opt.up[1], f[2] * opt.up[0] - f[0] * opt.up[2],
+                       f[0] * opt.up[1] - f[1] * opt.up[0]});
+  const Vec3 u = {r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2], r[0] * f[1] - r[1] * f[0]};
+  std::vector<float> sx(n), sy(n), sz(n);
+  float lo[2] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max()}, hi[2] = {-lo[0], -lo[1]};
+  float emax = opt.max_error;
+  for (std::int64_t v = 0; v < n; ++v) {
+    const float* p = &positions[3 * v];
+    sx[v] = p[0] * r[0] + p[1] * r[1] + p[2] * r[2];
+    sy[v] = p[0] * u[0] + p[1] * u[1] + p[2] * u[2];
+    sz[v] = p[0] * f[0] + p[1] * f[1] + p[2] * f[2];
+    lo[0] = std::min(lo[0], sx[v]);
+    hi[0] = std::max(hi[0], sx[v]);
+    lo[1] = std::min(lo[1], sy[v]);
+    hi[1] = std::max(hi[1], sy[v]);
+    if (opt.max_error <= 0.0f && std::isfinite(error[v])) emax = std::max(emax, error[v]);
+  }
+  if (!(emax > 0.0f)) emax = 1.0f;
+  const int bar = opt.colour_bar ? std::max(8, opt.width / 24) : 0;
+  const float margin = 0.05f;
+  const float avail_w = (opt.width - 2 * bar) * (1 - 2 * margin), avail_h = opt.height * (1 - 2 * margin);
+  const float ext = std::max((hi[0] - lo[0]) / avail_w, (hi[1] - lo[1]) / avail_h);
+  const float scale = ext > 0.0f ? 1.0f / ext : 1.0f;
+  const float cx = 0.5f * (lo[0] + hi[0]), cy = 0.5f * (lo[1] + hi[1]);
+  for (std::int64_t v = 0; v < n; ++v) {
+    sx[v] = 0.5f * (opt.width - bar) + (sx[v] - cx) * scale;
+    sy[v] = 0.5f * opt.height - (sy[v] - cy) * scale;
+  }
+  std::vector<float> zbuf(static_cast<std::size_t>(opt.width) * opt.height, std::numeric_limits<float>::infinity());
+  for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
+    const std::int32_t a = triangles[t], b = triangles[t + 1], c = triangles[t + 2];
+    GATCORE_CHECK(a >= 0 && b >= 0 && c >= 0 && a < n && b < n && c < n, "render_error_map: triangle ", t / 3,
+                  " references a missing vertex");
+    const float area = (sx[b] - sx[a]) * (sy[c] - sy[a]) - (sx[c] - sx[a]) * (sy[b] - sy[a]);
+    if (std::abs(area) < 1e-12f) continue;
+    // Facing: |cos| between the 3-D normal and the view direction.
+    const float* pa = &positions[3 * a];
+    const float* pb = &positions[3 * b];
+    const float* pc = &positions[3 * c];
+    const float e1[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}, e2[3] = {pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
+    const float nn[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const float nl = std::sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+    const float shade = 0.35f + 0.65f * (nl > 0.0f ? std::abs(nn[0] * f[0] + nn[1] * f[1] + nn[2] * f[2]) / nl : 1.0f);
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({sx[a], sx[b], sx[c]}))));
+    const int x1 = std::min(opt.width - 1, static_cast<int>(std::ceil(std::max({sx[a], sx[b], sx[c]}))));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({sy[a], sy[b], sy[c]}))));
+    const int y1 = std::min(opt.height - 1, static_cast<int>(std::ceil(std::max({sy[a], sy[b], sy[c]}))));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const float px = x + 0.5f, py = y + 0.5f;
+        const float w0 = ((sx[b] - px) * (sy[c] - py) - (sx[c] - px) * (sy[b] - py)) / area;
+        const float w1 = ((sx[c] - px) * (sy[a] - py) - (sx[a] - px) * (sy[c] - py)) / area;
+        const float w2 = 1.0f - w0 - w1;
+        if (w0 < 0.0f || w1 < 0.0f || w2 < 0.0f) continue;
+        const float z = w0 * sz[a] + w1 * sz[b] + w2 * sz[c];
+        float& zb = zbuf[static_cast<std::size_t>(y) * opt.width + x];
+        if (z >= zb) continue;
+        zb = z;
+        const float e = (w0 * error[a] + w1 * error[b] + w2 * error[c]) / emax;
+        auto col = error_colour(e);
+        for (auto& ch : col) ch = static_cast<std::uint8_t>(std::lround(ch * shade));
+        put(img, x, y, col);
+      }
+  }
+  if (bar)
+    for (int y = opt.height / 10; y < opt.height * 9 / 10; ++y) {
+      const float t = 1.0f - static_cast<float>(y - opt.height / 10) / (opt.height * 8 / 10);
+      for (int x = opt.width - bar; x < opt.width - bar / 3; ++x) put(img, x, y, error_colour(t));
+    }
+  return img;
+}
+
+Image plot_curves(const std::vector<std::vector<float>>& series, int width, int height, bool log_y) {
+  Image img = blank(width, height);
+  float lo = std::numeric_limits<float>::max(), hi = -lo;
+  std::size_t len = 0;
+  bool positive = true;
+  for (const auto& s : series)
+    for (float v : s) {
+      GATCORE_CHECK(std::isfinite(v), "plot_curves: a value is not finite");
+      positive = positive && v > 0.0f;
+    }
+  const bool logy = log_y && positive;
+  for (const auto& s : series) {
+    len = std::max(len, s.size());
+    for (float v : s) {
+      const float y = logy ? std::log10(v) : v;
+      lo = std::min(lo, y);
+      hi = std::max(hi, y);
+    }
+  }
+  const float L = 0.08f * width, R = 0.97f * width, T = 0.05f * height, B = 0.9f * height;
+  const std::array<std::uint8_t, 3> axis = {60, 60, 60}, grid = {225, 225, 225};
+  if (len == 0) return img;
+  if (!(hi > lo)) {
+    hi = lo + 1.0f;
+    lo -= 1.0f;
+  }
+  if (logy)
+    for (int d = static_cast<int>(std::floor(lo)); d <= static_cast<int>(std::ceil(hi)); ++d) {
+      const float y = B - (d - lo) / (hi - lo) * (B - T);
+      if (y >= T && y <= B) line(img, L, y, R, y, grid);
+    }
+  line(img, L, B, R, B, axis);
+  line(img, L, T, L, B, axis);
+  static const std::array<std::uint8_t, 3> colours[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44}, {214, 39, 40}};
+  for (std::size_t k = 0; k < series.size(); ++k) {
+    const auto& s = series[k];
+    for (std::size_t i = 0; i + 1 < s.size(); ++i) {
+      auto X = [&](std::size_t j) { return L + (len > 1 ? static_cast<float>(j) / (len - 1) : 0.0f) * (R - L); };
+      auto Y = [&](float v) { return B - ((logy ? std::log10(v) : v) - lo) / (hi - lo) * (B - T); };
+      line(img, X(i), Y(s[i]), X(i + 1), Y(s[i + 1]), colours[k % 4]);
+    }
+  }
+  return img;
+}
+
+namespace {
+
+std::uint32_t crc32(const std::uint8_t* p, std::size_t n, std::uint32_t c = 0xFFFFFFFFu) {
+  static std::uint32_t table[256];
+  static bool init = [] {
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t x = i;
+      for (int k = 0; k < 8; ++k) x = (x & 1) ? 0xEDB88320u ^ (x >> 1) : x >> 1;
+      table[i] = x;
+    }
+    return true;
+  }();
+  (void)init;
+  for (std::size_t i = 0; i < n; ++i) c = table[(c ^ p[i]) & 0xFF] ^ (c >> 8);
+  return c;
+}
+
+void be32(std::vector<std::uint8_t>& out, std::uint32_t v) {
+  for (int s = 24; s >= 0; s -= 8) out.push_back(static_cast<std::uint8_t>(v >> s));
+}
+
+void chunk(std::vector<std::uint8_t>& out, const char* type, const std::vector<std::uint8_t>& data) {
+  be32(out, static_cast<std::uint32_t>(data.size()));
+  const std::size_t start = out.size();
+  out.insert(out.end(), type, type + 4);
+  out.insert(out.end(), data.begin(), data.end());
+  be32(out, crc32(out.data() + start, out.size() - start) ^ 0xFFFFFFFFu);
+}
+
+}  // namespace
+
+void write_png(const std::string& path, const Image& img) {
+  GATCORE_CHECK(img.width > 0 && img.height > 0 &&
+                    img.rgb.size() == static_cast<std::size_t>(img.width) * img.height * 3,
+                path, ": image of ", img.width, "x", img.height, " with ", img.rgb.size(), " bytes");
+  std::vector<std::uint8_t> raw;
+  raw.reserve(static_cast<std::size_t>(img.height) * (3 * img.width + 1));
+  for (int y = 0; y < img.height; ++y) {
+    raw.push_back(0);  // filter: none
+    raw.insert(raw.end(), img.rgb.begin() + 3 * static_cast<std::size_t>(y) * img.width,
+               img.rgb.begin() + 3 * static_cast<std::size_t>(y + 1) * img.width);
+  }
+  std::vector<std::uint8_t> z = {0x78, 0x01};
+  for (std::size_t off = 0; off < raw.size() || off == 0; off += 65535) {
+    const std::size_t len = std::min<std::size_t>(65535, raw.size() - off);
+    z.push_back(off + len >= raw.size() ? 1 : 0);
+    z.push_back(static_cast<std::uint8_t>(len & 0xFF));
+    z.push_back(static_cast<std::uint8_t>(len >> 8));
+    z.push_back(static_cast<std::uint8_t>(~len & 0xFF));
+    z.push_back(static_cast<std::uint8_t>((~len >> 8) & 0xFF));
+    z.insert(z.end(), raw.begin() + off, raw.begin() + off + len);
+    if (raw.empty()) break;
+  }
+  std::uint32_t s1 = 1, s2 = 0;
+  for (std::uint8_t b : raw) {
+    s1 = (s1 + b) % 65521;
+    s2 = (s2 + s1) % 65521;
+  }
+  be32(z, (s2 << 16) | s1);
+  std::vector<std::uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  std::vector<std::uint8_t> ihdr;
+  be32(ihdr, static_cast<std::uint32_t>(img.width));
+  be32(ihdr, static_cast<std::uint32_t>(img.height));
+  ihdr.insert(ihdr.end(), {8, 2, 0, 0, 0});  // 8-bit RGB, deflate, no filter, no interlace
+  chunk(png, "IHDR", ihdr);
+  chunk(png, "IDAT", z);
+  chunk(png, "IEND", {});
+  // Through a temp file renamed over `path`: a picture that is rewritten
+  // while training (the loss curve) is never seen half written.
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    GATCORE_CHECK(f.good(), path, ": cannot write the file (through '", tmp, "')");
+    f.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    f.flush();
+    if (!f.good()) {
+      std::remove(tmp.c_str());
+      throw InvalidArgument(detail::cat(path, ": cannot write the file (through '", tmp, "')"));
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw InvalidArgument(detail::cat(path, ": cannot rename '", tmp, "' to it"));
+  }
+}
+
+}  // namespace gatcore::character

@@ -1,0 +1,3 @@
+#pragma once
+// Fixture for layout_dependency_direction_catches: data/ may include rig/.
+#include "gatcore/character/rig/skeleton.hpp"
