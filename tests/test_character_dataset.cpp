@@ -8,10 +8,10 @@
 
 #include "character_fixtures.hpp"
 #include "gatcore/character/data/dataset.hpp"
-#include "gatcore/character/io/gltf.hpp"
-#include "gatcore/character/rig/motion.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/gltf.hpp"
+#include "gatcore/character/rig/motion.hpp"
 
 using namespace gatcore::character;
 

@@ -4,8 +4,8 @@
 #include <filesystem>
 
 #include "character_fixtures.hpp"
-#include "gatcore/character/io/gltf.hpp"
 #include "gatcore/character/eval/metrics.hpp"
+#include "gatcore/character/io/gltf.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/error.hpp"
 

@@ -11,9 +11,9 @@
 
 #include "character_fixtures.hpp"
 #include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/io/gltf.hpp"
 #include "gatcore/character/rig/joint_limits.hpp"
-#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/error.hpp"
 

@@ -5,12 +5,12 @@
 #include <filesystem>
 
 #include "character_fixtures.hpp"
+#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/features/features.hpp"
+#include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/io/gltf.hpp"
 #include "gatcore/character/rig/motion.hpp"
-#include "gatcore/character/data/procedural.hpp"
-#include "gatcore/character/io/bvh.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

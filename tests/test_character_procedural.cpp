@@ -3,10 +3,10 @@
 
 #include <cmath>
 
+#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/features/features.hpp"
 #include "gatcore/character/rig/motion.hpp"
-#include "gatcore/character/data/procedural.hpp"
 
 using namespace gatcore::character;
 

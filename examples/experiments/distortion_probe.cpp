@@ -24,8 +24,8 @@
 
 #include <Eigen/Dense>
 
-#include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/data/training_data.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/io/bvh.hpp"
 
 using namespace gatcore;

@@ -10,12 +10,12 @@
 
 #include "commands.hpp"
 #include "gatcore/character/data/dataset.hpp"
-#include "gatcore/character/deform/detail_distortion.hpp"
-#include "gatcore/character/io/gltf.hpp"
-#include "gatcore/character/rig/motion.hpp"
 #include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/gltf.hpp"
+#include "gatcore/character/rig/motion.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;

@@ -14,8 +14,8 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
-#include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/inference/corrective.hpp"
+#include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"

@@ -14,9 +14,9 @@
 
 #include "commands.hpp"
 #include "eval_motion.hpp"
-#include "gatcore/character/viz/render.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
+#include "gatcore/character/viz/render.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"

@@ -10,13 +10,13 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/io/import.hpp"
-#include "gatcore/character/viz/loss_curve.hpp"
 #include "gatcore/character/rig/motion.hpp"
+#include "gatcore/character/viz/loss_curve.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 

@@ -10,8 +10,8 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
-#include "gatcore/character/io/gltf.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
+#include "gatcore/character/io/gltf.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore;

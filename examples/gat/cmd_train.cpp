@@ -20,9 +20,9 @@
 #include <omp.h>
 
 #include "commands.hpp"
+#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
-#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"

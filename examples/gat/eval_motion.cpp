@@ -17,11 +17,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
-#include "gatcore/character/viz/render.hpp"
-#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 

@@ -6,10 +6,10 @@
 #include <nlohmann/json.hpp>
 
 #include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
-#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "gatcore/character/features/frame_features.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/train.hpp"
 
@@ -25,28 +26,31 @@ CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, c
                 model.config().name, " predicts skin weights, not displacements");
   const PreparedCharacter& pc = d.prepared;
   const auto t0 = std::chrono::steady_clock::now();
-  // The whole-mesh sample of training, without its Delta Mush target.
-  DenseGatsSample ds = make_densegats_sample(pc, pose, 0, 0, /*with_target=*/false);
+  // The whole mesh's features, as a training sample computes them (without
+  // the Delta Mush target).
+  const PosedFrame frame = pose_frame(pc, pose);
+  const std::vector<std::int32_t> vertices = all_vertices(pc.character.mesh.num_vertices());
   models::Sample s;
   s.name = pc.character.name;
-  s.features = densegats_model_features(features_in_bone_order(ds.features, d.mapping), ds);
+  s.features = densegats_model_features(features_in_bone_order(densegats_frame_features(frame, vertices), d.mapping),
+                                        distortion_frame_features(pc, frame, vertices));
   GATCORE_CHECK(s.features.cols() == model.config().in_dim, s.name, ": ", s.features.cols(),
                 " features (bones and distortion scales) for a model that takes ", model.config().in_dim);
-  s.graph = share(std::move(ds.graph));
+  s.graph = share(induced_subgraph(pc.mesh_graph, vertices));
   const auto t1 = std::chrono::steady_clock::now();
   const Tensor y = models::predict(model, s, norm);
   const auto t2 = std::chrono::steady_clock::now();
   CorrectedFrame f;
-  const std::int64_t n = ds.lbs.rows();
+  const std::int64_t n = static_cast<std::int64_t>(vertices.size());
   f.lbs.resize(static_cast<std::size_t>(3 * n));
   f.corrected.resize(f.lbs.size());
   // Normalised p' = (p - origin) * scale: back to world units.
   const float inv = 1.0f / pc.norm.scale;
   for (std::int64_t v = 0; v < n; ++v) {
-    // The model predicts in the root frame (make_densegats_sample).
-    const Vec3 o = root_offset_to_world(ds, {y.at(v, 0), y.at(v, 1), y.at(v, 2)});
+    // The model predicts in the root frame (frame_features.hpp).
+    const Vec3 o = root_offset_to_world(frame.root_motion, {y.at(v, 0), y.at(v, 1), y.at(v, 2)});
     for (int c = 0; c < 3; ++c) {
-      const float l = ds.lbs.at(v, c) * inv + pc.norm.origin[c];
+      const float l = frame.lbs[3 * v + c] * inv + pc.norm.origin[c];
       const float off = o[std::size_t(c)] * inv;
       GATCORE_CHECK(std::isfinite(off), s.name, ": the model predicted a non-finite offset at vertex ", v);
       f.lbs[3 * v + c] = l;

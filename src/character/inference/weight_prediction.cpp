@@ -4,8 +4,8 @@
 #include <chrono>
 #include <cmath>
 
-#include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/features/features.hpp"
+#include "gatcore/character/features/frame_features.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/train.hpp"
 
@@ -22,11 +22,11 @@ WeightPrediction predict_skin_weights(models::Model& model, const models::Normal
   out.mapping = map_bones(ch.skeleton, bones, aliases, ch.name);
   const auto B = static_cast<std::int64_t>(bones.size());
   const PreparedCharacter pc = prepare_character(ch, DeltaMushParams{0, 0.5f});  // no smoothing needed here
-  NeuroSkinningSample ns = make_neuroskinning_sample(pc);
+  const std::vector<std::int32_t> vertices = all_vertices(pc.character.mesh.num_vertices());
   models::Sample s;
   s.name = ch.name;
-  s.features = features_in_bone_order(ns.features, out.mapping);
-  s.graph = share(std::move(ns.graph));
+  s.features = features_in_bone_order(neuroskinning_rest_features(pc, vertices), out.mapping);
+  s.graph = share(induced_subgraph(pc.mesh_graph, vertices));
   int k = 1;
   for (int p : model.pool_sizes()) k = std::max(k, p);
   if (!model.pool_sizes().empty())

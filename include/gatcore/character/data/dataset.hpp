@@ -2,11 +2,11 @@
 // Training samples for the two models, generated on the fly, and the
 // train / validation / test split by character.
 //
-// A PreparedCharacter holds what every sample of one character shares: the
-// character re-expressed in its world bind frame (so Delta Mush deltas and
-// features are in world units), its normalisation, the Delta Mush binding
-// (its parameters are the dataset's reference-deformer record) and the mesh
-// graph. Samples are in normalised coordinates (NormalisationStats).
+// A sample is built from a PreparedCharacter (features/prepared_character.hpp)
+// with the feature functions inference uses too
+// (features/frame_features.hpp), plus what only training has: the Delta Mush
+// target, vertex windows, the induced subgraph. Samples are in normalised
+// coordinates (NormalisationStats).
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -14,9 +14,11 @@
 #include <span>
 #include <vector>
 
-#include "gatcore/character/rig/character.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/features/features.hpp"
+#include "gatcore/character/features/frame_features.hpp"
+#include "gatcore/character/features/prepared_character.hpp"
+#include "gatcore/character/rig/character.hpp"
 #include "gatcore/character/rig/joint_limits.hpp"
 #include "gatcore/character/rig/motion.hpp"
 #include "gatcore/graph.hpp"
@@ -24,42 +26,8 @@
 
 namespace gatcore::character {
 
-// The character with bind_to_world applied: positions in the world frame,
-// inverse bind matrices compensated, so skinning the world bind pose gives
-// the world rest mesh.
-Character to_world(const Character& ch, const Mat4& bind_to_world);
-
-struct PreparedCharacter {
-  Character character;  // world frame (to_world)
-  NormalisationStats norm;  // of the world-frame character (bind_to_world = identity)
-  DeltaMush delta_mush;
-  CsrGraph mesh_graph;  // mesh edges + self-loops
-  Pose rest;            // bind pose of the world-frame character
-  // DenseGATs' detail-distortion columns (detail_distortion.hpp): the
-  // smoothing scales and the world-frame rest details, one per scale.
-  std::vector<int> distortion_scales;
-  std::vector<std::vector<float>> rest_details;
-};
-PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {},
-                                    std::span<const int> distortion_scales = {});
-// Sets the scales (checked) and recomputes the rest details.
-void set_distortion_scales(PreparedCharacter& pc, std::span<const int> scales);
-
-// The two halves of the distortion columns over the whole mesh, root frame,
-// normalised, [scales][3 n] each: the rest details carried by `skinning`
-// (skinning_matrices of the pose) and the details of the root-frame LBS mesh
-// `lbs_root`. The distortion is rest - posed.
-struct DetailHalves {
-  std::vector<std::vector<float>> rest, posed;
-};
-DetailHalves detail_halves(const PreparedCharacter& pc, std::span<const Mat4> skinning,
-                           std::span<const float> lbs_root, const Mat4& to_root);
-
-// Features and targets are expressed in the character's root frame: the
-// skeleton root above the hips (the joint that carries root motion) is moved
-// back to its rest placement, so a character walking away or turning gives
-// the network the same inputs as one posed in place (random training poses
-// keep the root at rest). `root_motion` maps that frame back to the world.
+// Features and targets are expressed in the character's root frame
+// (frame_features.hpp). `root_motion` maps that frame back to the world.
 struct DenseGatsSample {
   Tensor features;  // [m, 6 + J]: posed position, posed normal, distance to each joint (normalised, root frame)
   Tensor distortion;  // [m, 3 S]: detail distortion at the character's S scales (normalised, root frame); S = 0: empty
@@ -77,14 +45,13 @@ struct DenseGatsSample {
 // Delta Mush and leaves `target` undefined.
 DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
                                       std::int64_t count, bool with_target = true);
-// The model's input: `bone_features` ([m, 6 + B], the sample's features in
-// the model's bone columns) followed by the sample's distortion columns.
-Tensor densegats_model_features(const Tensor& bone_features, const DenseGatsSample& s);
-// A root-frame displacement (target or prediction) in the world frame (normalised units).
-Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& offset);
-// The joint that carries root motion: the topmost ancestor of the
-// normalisation's origin joint (the hips).
-std::int32_t root_motion_joint(const PreparedCharacter& pc);
+// The sample's model input and root-to-world offsets (frame_features.hpp).
+inline Tensor densegats_model_features(const Tensor& bone_features, const DenseGatsSample& s) {
+  return densegats_model_features(bone_features, s.distortion);
+}
+inline Vec3 root_offset_to_world(const DenseGatsSample& s, const Vec3& offset) {
+  return root_offset_to_world(s.root_motion, offset);
+}
 
 struct NeuroSkinningSample {
   Tensor features;  // [m, 6 + J]: rest position, rest normal, distance to each bone segment (normalised)

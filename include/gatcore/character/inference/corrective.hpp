@@ -1,13 +1,15 @@
 #pragma once
 // DenseGATs at playback: a character posed frame by frame, each frame linear
 // blend skinned and corrected by a trained displacement model (densegats, its
-// ablations, origat), with the features computed exactly as in training.
+// ablations, origat), with the features computed exactly as in training:
+// by the same functions (features/frame_features.hpp), not through the
+// training-sample builder.
 #include <span>
 #include <string>
 #include <vector>
 
+#include "gatcore/character/features/prepared_character.hpp"
 #include "gatcore/character/inference/character_model.hpp"
-#include "gatcore/character/data/dataset.hpp"
 #include "gatcore/models/model.hpp"
 #include "gatcore/models/sample.hpp"
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "gatcore/character/rig/character.hpp"
 #include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/rig/character.hpp"
 #include "gatcore/models/model.hpp"
 #include "gatcore/models/sample.hpp"
 
