@@ -10,6 +10,7 @@
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
 #include "gatcore/character/data/procedural.hpp"
+#include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -67,18 +68,7 @@ void save_dataset(const std::string& path, const DatasetDescription& d) {
   j["validation"] = d.validation;
   j["test"] = d.test;
   j["split"] = {{"train", d.split.train}, {"validation", d.split.validation}, {"test", d.split.test}};
-  // Atomic: a temporary file beside the target, renamed over it.
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
-    f << j.dump(2) << "\n";
-    f.flush();
-    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  GATCORE_CHECK(!ec, path, ": cannot replace the file: ", ec.message());
+  write_file_atomic(path, j.dump(2) + "\n");
 }
 
 DatasetDescription load_dataset(const std::string& path) {
