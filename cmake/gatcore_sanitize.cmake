@@ -10,7 +10,7 @@
 # scripts/sanitize.sh configures both in one clang build (build-asan/), runs
 # the test suite under it and each fuzzer for a bounded time.
 set(GATCORE_SANITIZE "" CACHE STRING "Comma-separated -fsanitize= list (e.g. address,undefined); empty: none")
-option(GATCORE_FUZZ "Build the libFuzzer harnesses of tests/fuzz (replay-only without clang)" OFF)
+option(GATCORE_FUZZ "Build tests/fuzz as libFuzzer fuzzers (needs clang; otherwise they are replay-only)" OFF)
 
 if(GATCORE_SANITIZE)
   add_compile_options(-fsanitize=${GATCORE_SANITIZE} -fno-omit-frame-pointer -fno-sanitize-recover=all)
