@@ -39,11 +39,11 @@
 #include "gatcore/graph.hpp"
 #include "gatcore/tensor.hpp"
 #include "kernels/simd.hpp"
+#include "kernels/target_region.hpp"
 
-#define ATTN_BEGIN_AVX2 _Pragma("GCC push_options") _Pragma("GCC target(\"avx2,fma\")")
-#define ATTN_BEGIN_AVX512 \
-  _Pragma("GCC push_options") _Pragma("GCC target(\"avx512f,avx512bw,avx512vl,avx2,fma\")")
-#define ATTN_END _Pragma("GCC pop_options")
+#define ATTN_BEGIN_AVX2 GATCORE_TARGET_BEGIN("avx2,fma")
+#define ATTN_BEGIN_AVX512 GATCORE_TARGET_BEGIN("avx512f,avx512bw,avx512vl,avx2,fma")
+#define ATTN_END GATCORE_TARGET_END
 
 namespace gatcore::cpu::attn {
 

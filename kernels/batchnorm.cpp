@@ -20,6 +20,7 @@
 
 #include "kernels/nn_detail.hpp"
 #include "kernels/simd.hpp"
+#include "kernels/target_region.hpp"
 
 namespace gatcore::cpu {
 
@@ -28,12 +29,11 @@ namespace isa_baseline {
 }  // namespace isa_baseline
 
 #if defined(__x86_64__) && defined(__GNUC__)
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma,prefer-vector-width=512")
+GATCORE_TARGET_BEGIN2("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma,prefer-vector-width=512", "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")
 namespace isa_avx512 {
 #include "kernels/batchnorm_impl.inc"
 }  // namespace isa_avx512
-#pragma GCC pop_options
+GATCORE_TARGET_END
 #define GATCORE_BN_AVX512 (simd_level() == SimdLevel::avx512)
 #else
 #define GATCORE_BN_AVX512 false

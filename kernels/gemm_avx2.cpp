@@ -1,11 +1,11 @@
 // Eigen GEMM built for AVX2 + FMA, chosen at run time (see gemm.cpp).
 #include "kernels/gemm_impl.hpp"
+#include "kernels/target_region.hpp"
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include "kernels/gemm_eigen_target_begin.inc"
 
-#pragma GCC push_options
-#pragma GCC target("avx2,fma,f16c,popcnt")
+GATCORE_TARGET_BEGIN("avx2,fma,f16c,popcnt")
 #ifndef __SSE3__
 #define __SSE3__ 1
 #endif
@@ -37,5 +37,5 @@
 #define GATCORE_GEMM_ISA_FN gemm_eigen_isa_avx2
 #include "kernels/gemm_eigen_impl.inc"
 #undef Eigen
-#pragma GCC pop_options
+GATCORE_TARGET_END
 #endif

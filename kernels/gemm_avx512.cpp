@@ -1,15 +1,15 @@
 // Eigen GEMM built for AVX-512 (F/BW/VL/DQ) + FMA, chosen at run time (see gemm.cpp).
 #include "kernels/gemm_impl.hpp"
+#include "kernels/target_region.hpp"
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include "kernels/gemm_eigen_target_begin.inc"
 
-#pragma GCC push_options
 // GCC 12 reports the _mm512_undefined_* idiom in its own AVX-512 headers
 // (used by Eigen) as -Wmaybe-uninitialized; it is a false positive.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC target("avx512f,avx512bw,avx512vl,avx512dq,avx512cd,avx2,fma,f16c,popcnt,prefer-vector-width=512")
+GATCORE_TARGET_BEGIN2("avx512f,avx512bw,avx512vl,avx512dq,avx512cd,avx2,fma,f16c,popcnt,prefer-vector-width=512", "avx512f,avx512bw,avx512vl,avx512dq,avx512cd,avx2,fma,f16c,popcnt")
 #ifndef __SSE3__
 #define __SSE3__ 1
 #endif
@@ -56,5 +56,5 @@
 #define GATCORE_GEMM_ISA_FN gemm_eigen_isa_avx512
 #include "kernels/gemm_eigen_impl.inc"
 #undef Eigen
-#pragma GCC pop_options
+GATCORE_TARGET_END
 #endif

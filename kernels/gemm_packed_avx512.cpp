@@ -24,10 +24,10 @@
 #include <vector>
 
 #include "kernels/gemm_impl.hpp"
+#include "kernels/target_region.hpp"
 
 #if defined(__x86_64__) && defined(__GNUC__)
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx2,fma")
+GATCORE_TARGET_BEGIN("avx512f,avx2,fma")
 #include <immintrin.h>
 
 namespace gatcore::cpu::detail {
@@ -288,5 +288,5 @@ void gemm_packed_avx512(const GemmArgs& g) {
 
 }  // namespace gatcore::cpu::detail
 
-#pragma GCC pop_options
+GATCORE_TARGET_END
 #endif

@@ -11,6 +11,11 @@ packages=(
   # Vulkan backend: headers/loader, the GLSL compiler, and Mesa lavapipe (a
   # CPU Vulkan device) so the Vulkan tests run without a GPU.
   glslang-tools libvulkan-dev mesa-vulkan-drivers vulkan-tools
+  # Sanitizer + fuzzing job (scripts/sanitize.sh): clang with the ASan/UBSan
+  # runtimes and libFuzzer.
+  clang libclang-rt-14-dev
+  # checkpoint_python_resave: a venv for Python's safetensors (pip).
+  python3-venv
 )
 
 missing=()

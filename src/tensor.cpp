@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <mutex>
 
@@ -128,9 +129,21 @@ Tensor Tensor::wrap(std::shared_ptr<Storage> s, DType dt, std::int64_t offset, s
   return t;
 }
 
+namespace {
+// Bytes of a [rows, cols] tensor of 4-byte elements; shapes come from files
+// (checkpoints, caches), so the product is checked before it is formed: it
+// must fit in an int64 (numel()) and, times 4, in a size_t.
+std::size_t tensor_bytes(std::int64_t rows, std::int64_t cols, const char* what) {
+  GATCORE_CHECK(rows >= 0 && cols >= 0, what, ": negative shape [", rows, ", ", cols, "]");
+  constexpr std::int64_t kMaxElems = std::numeric_limits<std::int64_t>::max() / 8;  // bytes fit with room to round
+  GATCORE_CHECK(cols == 0 || rows <= kMaxElems / cols, what, ": shape [", rows, ", ", cols,
+                "] is too large (more than ", kMaxElems, " elements)");
+  return static_cast<std::size_t>(rows * cols) * 4;
+}
+}  // namespace
+
 Tensor Tensor::empty(std::int64_t rows, std::int64_t cols, DType dt) {
-  GATCORE_CHECK(rows >= 0 && cols >= 0, "Tensor::empty: negative shape [", rows, ", ", cols, "]");
-  auto s = Storage::allocate_cpu(static_cast<std::size_t>(rows * cols) * 4);
+  auto s = Storage::allocate_cpu(tensor_bytes(rows, cols, "Tensor::empty"));
   return wrap(std::move(s), dt, 0, rows, cols, cols);
 }
 
@@ -148,7 +161,7 @@ Tensor Tensor::full(std::int64_t rows, std::int64_t cols, float value) {
 }
 
 Tensor Tensor::from(std::int64_t rows, std::int64_t cols, const std::vector<float>& values) {
-  GATCORE_CHECK(static_cast<std::int64_t>(values.size()) == rows * cols, "Tensor::from: ",
+  GATCORE_CHECK(values.size() * 4 == tensor_bytes(rows, cols, "Tensor::from"), "Tensor::from: ",
                 values.size(), " values given for shape [", rows, ", ", cols, "]");
   Tensor t = empty(rows, cols);
   if (!values.empty()) std::memcpy(t.data(), values.data(), values.size() * 4);
@@ -160,7 +173,7 @@ Tensor Tensor::from(std::int64_t rows, std::int64_t cols, std::initializer_list<
 }
 
 Tensor Tensor::from_i32(std::int64_t rows, std::int64_t cols, const std::vector<std::int32_t>& values) {
-  GATCORE_CHECK(static_cast<std::int64_t>(values.size()) == rows * cols, "Tensor::from_i32: ",
+  GATCORE_CHECK(values.size() * 4 == tensor_bytes(rows, cols, "Tensor::from_i32"), "Tensor::from_i32: ",
                 values.size(), " values given for shape [", rows, ", ", cols, "]");
   Tensor t = empty(rows, cols, DType::i32);
   if (!values.empty()) std::memcpy(t.data_i32(), values.data(), values.size() * 4);

@@ -114,6 +114,7 @@ struct GlbOptions {
   bool nan = false;          // a NaN position
   bool animation = true;
   bool second_primitive = true;
+  bool zero_ibm = false;     // every inverse bind matrix all zeros (singular)
 };
 
 inline void pad4(std::string& s, char c) {
@@ -172,6 +173,7 @@ inline std::string skinned_glb(const GlbOptions& o = {}) {
   // Inverse bind matrices: root at 0, bone1 at y = 1, helper at y = 1.5.
   std::vector<float> ibm;
   for (float y : {0.0f, 1.0f, 1.5f}) ibm.insert(ibm.end(), {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -y, 0, 1});
+  if (o.zero_ibm) std::fill(ibm.begin(), ibm.end(), 0.0f);
   const int aIbm = acc(add(ibm.data(), ibm.size() * 4), 5126, 3, "MAT4");
   const std::vector<float> times = {0.0f, 1.0f};
   const float s = std::sin(0.25f * 3.14159265f), c = std::cos(0.25f * 3.14159265f);

@@ -15,6 +15,8 @@
 
 #include "character_fixtures.hpp"
 #include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/error.hpp"
 
@@ -84,6 +86,11 @@ TEST_CASE("FBX import rejects bad files", "[character][fbx]") {
   o.skin = false;
   const std::string fbx = to_fbx(charfix::write_temp("fbx_noskin.glb", charfix::skinned_glb(o)), "noskin.fbx");
   CHECK_THROWS_WITH(load_character(fbx), Contains("noskin.fbx") && Contains("no skin"));
+  // assimp parses a user's file in a child process first; its refusal comes back with its message.
+  CHECK_THROWS_WITH(load_character(g), Contains("garbage.fbx: not a readable character file: "));
+  // BVH never reaches assimp (its BVH importer corrupts memory on bad files).
+  const std::string bvh = charfix::write_temp("uaf.bvh", "HIERARCHY\nROOT a\n{JOINT b\n{CHANNELS 1 Xrotation}}\n");
+  CHECK_THROWS_WITH(load_character(bvh), Contains("uaf.bvh: a BVH file holds a motion, not a character"));
 }
 
 TEST_CASE("FBX import of CesiumMan", "[character][fbx][data]") {
@@ -98,4 +105,135 @@ TEST_CASE("FBX import of CesiumMan", "[character][fbx][data]") {
   CHECK(b.skeleton.num_joints() == a.skeleton.num_joints());
   CHECK(max_abs_diff(linear_blend_skinning(b.mesh, skinning_matrices(b.skeleton, bind_pose(b.skeleton))),
                      b.mesh.positions) < 1e-3f);
+}
+
+// ---------------------------------------------------------------------------
+// gatcore's own BVH reader gives the same joint transforms as the assimp
+// import it replaced (issue #20: assimp's BVH importer corrupts memory on bad
+// files, so BVH no longer goes through it). The reference below is the old
+// load_bvh, kept here only to compare against, on well-formed files.
+
+namespace {
+
+Mat4 ai_mat4(const aiMatrix4x4& m) {
+  return {m.a1, m.b1, m.c1, m.d1, m.a2, m.b2, m.c2, m.d2, m.a3, m.b3, m.c3, m.d3, m.a4, m.b4, m.c4, m.d4};
+}
+
+Motion assimp_bvh_reference(const std::string& path) {
+  Assimp::Importer imp;
+  const aiScene* scene = imp.ReadFile(path, 0);
+  REQUIRE(scene);
+  const aiAnimation* anim = scene->mAnimations[0];
+  std::map<std::string, const aiNodeAnim*> channel;
+  for (unsigned c = 0; c < anim->mNumChannels; ++c) channel[anim->mChannels[c]->mNodeName.C_Str()] = anim->mChannels[c];
+  Motion m;
+  Skeleton& s = m.skeleton;
+  std::vector<const aiNodeAnim*> chan;
+  struct Item {
+    const aiNode* node;
+    int parent;
+  };
+  std::vector<Item> stack{{scene->mRootNode, -1}};
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    int self = it.parent;
+    auto ch = channel.find(it.node->mName.C_Str());
+    if (ch != channel.end()) {
+      self = s.num_joints();
+      s.names.push_back(it.node->mName.C_Str());
+      s.parents.push_back(it.parent);
+      s.rest_local.push_back(to_transform(ai_mat4(it.node->mTransformation)));
+      chan.push_back(ch->second);
+    }
+    for (unsigned c = it.node->mNumChildren; c-- > 0;) stack.push_back({it.node->mChildren[c], self});
+  }
+  std::size_t frames = 0;
+  for (const aiNodeAnim* c : chan) frames = std::max<std::size_t>({frames, c->mNumPositionKeys, c->mNumRotationKeys});
+  m.clip.fps = float(anim->mTicksPerSecond);
+  m.clip.frames.resize(frames);
+  for (std::size_t f = 0; f < frames; ++f) {
+    Pose& p = m.clip.frames[f];
+    p.local = s.rest_local;
+    for (std::size_t j = 0; j < chan.size(); ++j) {
+      const aiNodeAnim* c = chan[j];
+      const aiVector3D& v = c->mPositionKeys[std::min<std::size_t>(f, c->mNumPositionKeys - 1)].mValue;
+      p.local[j].translation = {v.x, v.y, v.z};
+      const aiQuaternion& q = c->mRotationKeys[std::min<std::size_t>(f, c->mNumRotationKeys - 1)].mValue;
+      p.local[j].rotation = quat_normalize({q.x, q.y, q.z, q.w});
+    }
+  }
+  return m;
+}
+
+void check_same_motion(const std::string& path) {
+  INFO(path);
+  const Motion ours = load_bvh(path), ref = assimp_bvh_reference(path);
+  REQUIRE(ours.skeleton.names == ref.skeleton.names);
+  REQUIRE(ours.skeleton.parents == ref.skeleton.parents);
+  CHECK(ours.clip.fps == Approx(ref.clip.fps).epsilon(1e-5));
+  REQUIRE(ours.clip.frames.size() == ref.clip.frames.size());
+  double worst = 0.0;
+  for (std::size_t f = 0; f < ours.clip.frames.size(); ++f)
+    for (std::size_t j = 0; j < ref.skeleton.names.size(); ++j) {
+      const Mat4 a = to_matrix(ours.clip.frames[f].local[j]), b = to_matrix(ref.clip.frames[f].local[j]);
+      for (int k = 0; k < 16; ++k) {
+        const double scale = k >= 12 ? std::max(1.0, double(std::abs(b[std::size_t(k)]))) : 1.0;
+        worst = std::max(worst, std::abs(double(a[std::size_t(k)]) - double(b[std::size_t(k)])) / scale);
+      }
+    }
+  INFO("largest difference of a local joint matrix entry (rotation; translation relative): " << worst);
+  CHECK(worst < 2e-5);
+}
+
+}  // namespace
+
+TEST_CASE("BVH: gatcore's reader matches the assimp import on generated motions", "[character][bvh]") {
+  check_same_motion(charfix::write_temp("swing.bvh", procedural_swing_bvh(48)));
+  // Every Euler order, position channels on a child, a joint without channels.
+  check_same_motion(charfix::write_temp("orders.bvh", R"(HIERARCHY
+ROOT Root
+{
+  OFFSET 1 2 3
+  CHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation
+  JOINT A
+  {
+    OFFSET 0 1 0
+    CHANNELS 3 Yrotation Xrotation Zrotation
+    JOINT B
+    {
+      OFFSET 0.5 0 0
+      CHANNELS 6 Zposition Xposition Yposition Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET 0 0 1
+      }
+    }
+  }
+  JOINT C
+  {
+    OFFSET 0 -1 0
+    CHANNELS 3 Xrotation Zrotation Yrotation
+    End Site
+    {
+      OFFSET 0 -1 0
+    }
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.04
+0.1 0.2 0.3 10 20 30 -45 60 170 1 2 3 -90 45 12 33 -12 271
+5 -2 7 -180 90 -90 0 0 0 -1 -2 -3 179 -179 90 -0.5 0.25 1e-3
+0 0 0 0 0 0 360 -360 720 0 0 0 0 0 0 15 30 45
+)"));
+}
+
+TEST_CASE("BVH: gatcore's reader matches the assimp import on CMU motions", "[character][bvh][data]") {
+  const std::filesystem::path dir = std::filesystem::path(GATCORE_SOURCE_DIR) / "../shared/data/motion/cmu";
+  if (!std::filesystem::exists(dir / "walk.bvh")) {
+    WARN("SKIPPED: " << dir.string() << " not present (third-party data)");
+    return;
+  }
+  for (const char* name : {"walk.bvh", "01_01.bvh"}) check_same_motion((dir / name).string());
 }

@@ -3,6 +3,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <functional>
+
+#include <nlohmann/json.hpp>
 #include <random>
 #include <set>
 
@@ -266,4 +270,53 @@ TEST_CASE("dataset descriptions round-trip and drive deterministic epochs", "[ch
   const std::string garbage = charfix::write_temp("garbage_dataset.json", "not json");
   CHECK_THROWS_WITH(load_dataset(garbage), Catch::Matchers::Contains("garbage_dataset.json"));
   CHECK_THROWS_WITH(load_dataset_character("procedural:dragon:1"), Catch::Matchers::Contains("procedural:dragon:1"));
+}
+
+TEST_CASE("dataset files are validated like gat dataset build's options (issue #20 reproducers)", "[character][dataset]") {
+  using Catch::Matchers::Contains;
+  const std::string repro = std::string(GATCORE_SOURCE_DIR) + "/tests/fuzz/repro/";
+  const std::pair<const char*, const char*> cases[] = {
+      {"dataset_random_poses_1e20.json", "field \"random_poses\" = 1e+20 is out of range [0, 1e+06]"},
+      {"cli_dataset_random_poses_2e9.json", "field \"random_poses\" = 2000000000 is out of range"},
+      {"cli_motion_stride_0/dataset.json", "field \"motion_stride\" = 0 is out of range [1, 1e+06]"},
+      {"cli_dataset_out_of_range/dataset.json", "field \"random_poses\" = -5 is out of range"},
+  };
+  for (const auto& [file, msg] : cases) {
+    INFO(file);
+    CHECK_THROWS_WITH(load_dataset(repro + file), Contains(repro + file) && Contains(msg));
+  }
+  // One field at a time, from a valid description.
+  const DatasetDescription d = describe_dataset({"procedural:humanoid:0", "procedural:humanoid:1", "procedural:humanoid:2"}, {});
+  const auto path = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "ranges.json").string();
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  save_dataset(path, d);
+  std::ifstream is(path);
+  const nlohmann::json good = nlohmann::json::parse(is);
+  auto rejects = [&](const std::function<void(nlohmann::json&)>& edit, const std::string& msg) {
+    nlohmann::json j = good;
+    edit(j);
+    const std::string p = charfix::write_temp("ranges_bad.json", j.dump());
+    INFO(msg);
+    CHECK_THROWS_WITH(load_dataset(p), Contains("ranges_bad.json") && Contains(msg));
+  };
+  rejects([](auto& j) { j["validation"] = 2.0; }, "field \"validation\" = 2.0 is out of range [0, 0.9]");
+  rejects([](auto& j) { j["validation"] = 0.5; j["test"] = 0.5; }, "field \"validation + test\" = 1 is out of range");
+  rejects([](auto& j) { j["split"]["train"].push_back(j["split"]["train"][0]); }, "is in split \"train\" and again in \"train\"");
+  rejects([](auto& j) { j["split"]["test"].push_back(j["split"]["train"][0]); }, "and again in \"test\"");
+  rejects([](auto& j) { j["split"]["test"].push_back(7); }, "split \"test\" names character 7 of 3");
+  rejects([](auto& j) { j["split"]["test"].push_back(-1); }, "field \"split.test\" = -1 is out of range");
+  rejects([](auto& j) { j["seed"] = -1; }, "field \"seed\" = -1");
+  rejects([](auto& j) { j["seed"] = 1.5; }, "field \"seed\" = 1.5 is not a whole number");
+  rejects([](auto& j) { j["subsample"] = -3; }, "field \"subsample\" = -3");
+  rejects([](auto& j) { j["pose_angle"] = "wide"; }, "field \"pose_angle\" must be a number");
+  rejects([](auto& j) { j["reference_deformer"]["iterations"] = 1e9; }, "field \"reference_deformer.iterations\"");
+  rejects([](auto& j) { j["version"] = 1e300; }, "unsupported dataset version");
+  CHECK_NOTHROW(load_dataset(path));
+  // The library's own builder refuses the same values.
+  DatasetDescription s;
+  s.motion_stride = 0;
+  CHECK_THROWS_WITH(describe_dataset({"procedural:humanoid:0"}, {}, s), Contains("field \"motion_stride\" = 0"));
+  s = {};
+  s.random_poses = 2000000000;
+  CHECK_THROWS_WITH(describe_dataset({"procedural:humanoid:0"}, {}, s), Contains("field \"random_poses\""));
 }

@@ -422,7 +422,19 @@ TEST_CASE("bake and point cache errors leave no file behind", "[character][expor
   write_point_cache(tmp("ok.pc2"), pc);
   std::string cut = slurp(tmp("ok.pc2"));
   cut.pop_back();
-  CHECK_THROWS_WITH(read_point_cache(charfix::write_temp("cut.pc2", cut)), Contains("expected 56"));
+  CHECK_THROWS_WITH(read_point_cache(charfix::write_temp("cut.pc2", cut)), Contains("truncated or corrupted"));
+  // Issue #20: counts from the file are checked against its size before
+  // anything is allocated, without wrap-around.
+  const std::string repro = std::string(GATCORE_SOURCE_DIR) + "/tests/fuzz/repro/";
+  CHECK_THROWS_WITH(read_point_cache(repro + "pc2_zero_points_1e9_samples.pc2"),
+                    Contains("pc2_zero_points_1e9_samples.pc2") && Contains("needs at least one of each"));
+  CHECK_THROWS_WITH(read_point_cache(repro + "pc2_zero_points_null_memcpy.pc2"), Contains("needs at least one of each"));
+  CHECK_THROWS_WITH(read_point_cache(repro + "pc2_size_check_wraps.pc2"),
+                    Contains("pc2_size_check_wraps.pc2") && Contains("truncated or corrupted"));
+  std::string nan = slurp(tmp("ok.pc2"));
+  const float q = std::nanf("");
+  std::memcpy(&nan[32 + 4], &q, 4);
+  CHECK_THROWS_WITH(read_point_cache(charfix::write_temp("nan.pc2", nan)), Contains("sample 0 point 0 holds a non-finite value"));
 }
 
 TEST_CASE("deform on Vulkan matches the CPU", "[character][export][deform][vulkan]") {

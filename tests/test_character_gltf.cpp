@@ -110,6 +110,43 @@ TEST_CASE("glTF import rejects bad files with the file and the problem", "[chara
     const std::string p = charfix::write_temp("garbage.gltf", "{\"asset\": {\"version\": \"2.0\"");
     CHECK_THROWS_WITH(load_gltf(p), Contains("garbage.gltf"));
   }
+  SECTION("singular inverse bind matrices") {
+    charfix::GlbOptions o;
+    o.zero_ibm = true;
+    const std::string p = charfix::write_temp("zero_ibm.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("zero_ibm.glb") && Contains("inverse bind matrix 0") &&
+                                        Contains("is not invertible"));
+  }
+}
+
+TEST_CASE("glTF import reads external URIs only inside the model's folder", "[character][gltf]") {
+  namespace fs = std::filesystem;
+  const fs::path top = fs::temp_directory_path() / "gatcore_uri_test", dir = top / "model";
+  fs::create_directories(dir);
+  std::ofstream(top / "secret.bin", std::ios::binary) << "0123456789abcdef";
+  std::ofstream(dir / "inside.bin", std::ios::binary) << "0123456789abcdef";
+  auto gltf = [&](const std::string& name, const std::string& uri) {
+    const fs::path p = dir / name;
+    std::ofstream(p) << "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":16,\"uri\":\"" << uri << "\"}]}";
+    return p.string();
+  };
+  for (const std::string& uri : std::vector<std::string>{"../secret.bin", "../../gatcore_uri_test/secret.bin", "./../secret.bin"}) {
+    INFO(uri);
+    CHECK_THROWS_WITH(load_gltf(gltf("escape.gltf", uri)),
+                      Contains("escape.gltf") && Contains("refusing to read") && Contains("outside the model's folder"));
+  }
+  // An absolute URI is joined to the folder by tinygltf, so it names no file there.
+  CHECK_THROWS_WITH(load_gltf(gltf("abs.gltf", (top / "secret.bin").string())), Contains("abs.gltf") && Contains("not found"));
+  // A symlink inside the folder that points out of it is refused too.
+  fs::remove(dir / "link.bin");
+  fs::create_symlink(top / "secret.bin", dir / "link.bin");
+  CHECK_THROWS_WITH(load_gltf(gltf("link.gltf", "link.bin")), Contains("outside the model's folder"));
+  // Inside: read (the file then fails later, for having no skin).
+  CHECK_THROWS_WITH(load_gltf(gltf("inside.gltf", "inside.bin")), !Contains("refusing") && Contains("no skin"));
+  // An option widens the folder.
+  GltfImportOptions wide;
+  wide.resource_root = top.string();
+  CHECK_THROWS_WITH(load_gltf(gltf("escape.gltf", "../secret.bin"), wide), !Contains("refusing") && Contains("no skin"));
 }
 
 namespace {

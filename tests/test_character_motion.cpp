@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <random>
+#include <algorithm>
 
 #include "character_fixtures.hpp"
 #include "gatcore/character/data/procedural.hpp"
@@ -86,6 +88,112 @@ TEST_CASE("BVH import rejects bad files", "[character][bvh]") {
   CHECK_THROWS_WITH(load_bvh(t), Contains("truncated.bvh"));
   const std::string g = charfix::write_temp("garbage.bvh", "this is not a motion file\n");
   CHECK_THROWS_WITH(load_bvh(g), Contains("garbage.bvh"));
+}
+
+TEST_CASE("BVH import: the fuzzing reproducers of issue #20 end in a clear error", "[character][bvh]") {
+  const std::string dir = std::string(GATCORE_SOURCE_DIR) + "/tests/fuzz/repro/";
+  const std::pair<const char*, const char*> cases[] = {
+      // assimp: heap-use-after-free, float->unsigned casts, a leaked node
+      {"bvh_assimp_use_after_free.bvh", "line 3: expected 'OFFSET', found 'JOINT'"},
+      {"bvh_assimp_channels_float_cast.bvh", "line 3: expected 'OFFSET', found 'CHANNELS'"},
+      {"bvh_assimp_frames_float_cast.bvh", "line 3: expected 'OFFSET', found '}'"},
+      {"bvh_truncated_root_leak.bvh", "the file ends"},
+      // accepted before: NaN rotation -> identity, 0 frames -> 1, frame time 0 -> infinite fps
+      {"cli_bvh_rotation_nan.bvh", "frame 1 joint 'Hips' Zrotation: 'nan' is not a finite number"},
+      {"cli_bvh_0_frames.bvh", "Frames: 0 (the motion has no frames)"},
+      {"cli_bvh_frame_time_0.bvh", "Frame Time 0 must be a positive number of seconds"},
+  };
+  for (const auto& [file, msg] : cases) {
+    INFO(file);
+    CHECK_THROWS_WITH(load_bvh(dir + file), Contains(dir + file) && Contains(msg));
+  }
+}
+
+TEST_CASE("BVH import: strict about counts, numbers and structure", "[character][bvh]") {
+  const std::string full = kBvh;
+  auto edited = [&](const std::string& from, const std::string& to) {
+    std::string t = full;
+    const auto at = t.find(from);
+    REQUIRE(at != std::string::npos);
+    return charfix::write_temp("edited.bvh", t.replace(at, from.size(), to));
+  };
+  CHECK_THROWS_WITH(load_bvh(edited("Frame Time:", "Frame Time: -0.5\nX")), Contains("Frame Time -0.5"));
+  CHECK_THROWS_WITH(load_bvh(edited("Frame Time:", "Frame Time: inf\nX")), Contains("not a finite number"));
+  CHECK_THROWS_WITH(load_bvh(edited("Frames:", "Frames: 99999999999\nX")), Contains("Frames: '99999999999'"));
+  CHECK_THROWS_WITH(load_bvh(edited("Frames:", "Frames: -2\nX")), Contains("Frames: '-2'"));
+  CHECK_THROWS_WITH(load_bvh(edited("CHANNELS 3", "CHANNELS 7")), Contains("CHANNELS count: '7'"));
+  CHECK_THROWS_WITH(load_bvh(edited("Zrotation Yrotation Xrotation\n    JOINT LeftLeg", "Zrotation Zrotation Xrotation\n    JOINT LeftLeg")),
+                    Contains("lists channel Zrotation twice"));
+  CHECK_THROWS_WITH(load_bvh(edited("OFFSET 1 -1 0", "OFFSET 1 nan 0")), Contains("joint 'LeftUpLeg' OFFSET: 'nan'"));
+  CHECK_THROWS_WITH(load_bvh(charfix::write_temp("extra.bvh", full + " 1.0\n")), Contains("more numbers than"));
+  CHECK_THROWS_WITH(load_bvh(edited("Xrotation", "Wrotation")), Contains("unknown channel 'Wrotation'"));
+}
+
+TEST_CASE("BVH import: channel values round-trip into the documented rotations and translations", "[character][bvh]") {
+  // A random hierarchy with random channel orders and values, written as BVH
+  // text, read back and compared with the rotations composed independently
+  // (product of axis rotations in the listed order, intrinsic, degrees).
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> angle(-180.f, 180.f), off(-3.f, 3.f);
+  const char* axes[] = {"X", "Y", "Z"};
+  const int kJoints = 12, kFrames = 5;
+  std::vector<int> parent(kJoints), depth(kJoints);
+  std::vector<std::array<int, 3>> order(kJoints);
+  std::vector<bool> has_pos(kJoints);
+  std::string text = "HIERARCHY\n";
+  // Preorder: joint j's parent is an earlier joint on the current path.
+  std::vector<int> path;
+  for (int j = 0; j < kJoints; ++j) {
+    while (!path.empty() && (rng() % 3 == 0)) {
+      path.pop_back();
+      text += "}\n";
+    }
+    if (j > 0 && path.empty()) path.push_back(0), text.pop_back(), text.pop_back();  // reopen the root
+    parent[std::size_t(j)] = path.empty() ? -1 : path.back();
+    order[std::size_t(j)] = {0, 1, 2};
+    std::shuffle(order[std::size_t(j)].begin(), order[std::size_t(j)].end(), rng);
+    has_pos[std::size_t(j)] = j == 0 || rng() % 4 == 0;
+    text += std::string(j == 0 ? "ROOT" : "JOINT") + " J" + std::to_string(j) + "\n{\nOFFSET " +
+            std::to_string(off(rng)) + " " + std::to_string(off(rng)) + " " + std::to_string(off(rng)) + "\nCHANNELS " +
+            (has_pos[std::size_t(j)] ? "6 Xposition Yposition Zposition " : "3 ");
+    for (int a : order[std::size_t(j)]) text += std::string(axes[a]) + "rotation ";
+    text += "\n";
+    path.push_back(j);
+  }
+  while (!path.empty()) path.pop_back(), text += "}\n";
+  text += "MOTION\nFrames: " + std::to_string(kFrames) + "\nFrame Time: 0.025\n";
+  std::vector<std::vector<float>> values(kFrames);
+  for (auto& v : values) {
+    for (int j = 0; j < kJoints; ++j)
+      for (int k = 0; k < (has_pos[std::size_t(j)] ? 6 : 3); ++k) v.push_back(k < 3 && has_pos[std::size_t(j)] ? off(rng) : angle(rng));
+    for (float x : v) text += std::to_string(x) + " ";
+    text += "\n";
+  }
+  const Motion m = load_bvh(charfix::write_temp("roundtrip.bvh", text));
+  REQUIRE(m.skeleton.num_joints() == kJoints);
+  CHECK(m.clip.fps == Approx(40.0f));
+  for (int j = 0; j < kJoints; ++j) CHECK(m.skeleton.parents[std::size_t(j)] == parent[std::size_t(j)]);
+  for (int f = 0; f < kFrames; ++f) {
+    std::size_t k = 0;
+    for (int j = 0; j < kJoints; ++j) {
+      const Transform& t = m.clip.frames[std::size_t(f)].local[std::size_t(j)];
+      const auto& v = values[std::size_t(f)];
+      Vec3 expect_pos = m.skeleton.rest_local[std::size_t(j)].translation;
+      if (has_pos[std::size_t(j)]) {
+        expect_pos = {std::stof(std::to_string(v[k])), std::stof(std::to_string(v[k + 1])), std::stof(std::to_string(v[k + 2]))};
+        k += 3;
+      }
+      Quat q{0, 0, 0, 1};
+      for (int a : order[std::size_t(j)]) {
+        Vec3 axis{0, 0, 0};
+        axis[std::size_t(a)] = 1;
+        q = quat_mul(q, quat_from_axis_angle(axis, std::stof(std::to_string(v[k++])) * float(M_PI / 180.0)));
+      }
+      for (int c = 0; c < 3; ++c) CHECK(t.translation[std::size_t(c)] == Approx(expect_pos[std::size_t(c)]).margin(1e-5));
+      const float dot = std::abs(q[0] * t.rotation[0] + q[1] * t.rotation[1] + q[2] * t.rotation[2] + q[3] * t.rotation[3]);
+      CHECK(dot == Approx(1.0f).margin(1e-5));
+    }
+  }
 }
 
 TEST_CASE("retargeting a motion onto its own skeleton reproduces it, grounded", "[character][retarget]") {

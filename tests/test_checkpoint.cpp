@@ -2,7 +2,9 @@
 // every kind of bad file rejected with a message naming file and problem.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 
@@ -131,11 +133,39 @@ TEST_CASE("bad checkpoint files are rejected with messages naming the file and t
     rejects(bytes.substr(0, bytes.size() / 2), "truncated");
     rejects(bytes.substr(0, bytes.size() - 4), "truncated");
   }
-  SECTION("wrong magic") {
-    rejects("PK\x03\x04 this is a zip file, not a model at all", "wrong magic");
+  SECTION("not a gatcore checkpoint: recognised by the format metadata key") {
+    rejects("PK\x03\x04 this is a zip file, not a model at all", "not a safetensors file");
     std::string other = bytes;
     other.replace(other.find("gatcore-checkpoint"), 7, "torchxx");
-    rejects(other, "wrong magic");
+    rejects(other, "not a gatcore checkpoint: metadata \"format\" is 'torchxx-checkpoint'");
+    const std::string plain = "{\"w\":{\"dtype\":\"F32\",\"shape\":[1,1],\"data_offsets\":[0,4]}}";
+    std::string st(8, '\0');
+    st[0] = char(plain.size());
+    rejects(st + plain + "abcd", "not a gatcore checkpoint: a safetensors file without __metadata__");
+  }
+  SECTION("edited header: the checksum covers the metadata") {
+    std::string c = bytes;
+    const auto at = c.find("\"target_scale\":\"1\"");
+    REQUIRE(at != std::string::npos);
+    c[at + 16] = '2';
+    rejects(c, "checksum mismatch");
+  }
+  SECTION("sizes from the file are checked before any product is formed") {
+    // Shape [2^62, 4] with 0 bytes of data: rows * cols * 4 wraps to 0.
+    CheckpointFile f;
+    f.metadata["config"] = "x";
+    const std::string ok = checkpoint_bytes(f);
+    std::string hdr = ok.substr(8);  // no tensors: no data section
+    while (hdr.back() == ' ') hdr.pop_back();
+    hdr.pop_back();  // the closing brace
+    hdr += ",\"norm.mean\":{\"dtype\":\"F32\",\"shape\":[4611686018427387904,4],\"data_offsets\":[0,0]}}";
+    std::string len(8, '\0');
+    for (int k = 0; k < 8; ++k) len[std::size_t(k)] = char((hdr.size() >> (8 * k)) & 0xff);
+    spit(bad, len + hdr);
+    CHECK_THROWS_WITH(read_checkpoint_file(bad), Catch::Contains("do not match shape [4611686018427387904, 4]"));
+    std::string huge = bytes;
+    huge[7] = 0x7f;  // header length ~ 2^63
+    rejects(huge, "header length");
   }
   SECTION("corrupted data") {
     std::string c = bytes;
@@ -165,7 +195,7 @@ TEST_CASE("bad checkpoint files are rejected with messages naming the file and t
     CheckpointFile v = f;
     write_checkpoint_file(bad, v);
     std::string vb = slurp(bad);
-    vb.replace(vb.find("\"format_version\":\"1\""), 20, "\"format_version\":\"7\"");
+    vb.replace(vb.find("\"format_version\":\"2\""), 20, "\"format_version\":\"7\"");
     rejects(vb, "unsupported format version '7'");
     // A checkpoint without training state can't resume.
     LoadedModel l = load_checkpoint(good);
@@ -183,9 +213,101 @@ TEST_CASE("checkpoint writes are atomic: no temp file left, an existing file is 
   save_checkpoint(path, *m, Normaliser{});
   CHECK_FALSE(std::ifstream(path + ".tmp").good());
   CHECK_NOTHROW(load_checkpoint(path));
-  CHECK_THROWS_WITH(save_checkpoint("/nonexistent_dir/x.gcm", *m, Normaliser{}), Catch::Contains("cannot open"));
+  CHECK_THROWS_WITH(save_checkpoint("/nonexistent_dir/x.gcm", *m, Normaliser{}),
+                    Catch::Contains("/nonexistent_dir/x.gcm") && Catch::Contains("No such file"));
+  // A temp file left by a process killed mid-write is cleaned by the next write.
+  spit(path + ".tmp", "half a checkpoint");
+  save_checkpoint(path, *m, Normaliser{});
+  CHECK_FALSE(std::ifstream(path + ".tmp").good());
+  CHECK_NOTHROW(load_checkpoint(path));
   auto f = make_model(small_config("fc"), 1);
   f->fold_batch_norm();
   CHECK_THROWS_WITH(save_checkpoint(path, *f, Normaliser{}), Catch::Contains("folded"));
   std::remove(path.c_str());
+}
+
+namespace {
+// A resumable checkpoint of a small trained model, at `path`.
+void save_trained(const std::string& path) {
+  ModelConfig cfg = small_config("densegats");
+  auto m = make_model(cfg, 3);
+  const auto data = data_for(cfg);
+  const Normaliser norm = Normaliser::fit(data, true);
+  TrainOptions o = TrainOptions::defaults_for(cfg);
+  o.batch_size = 2;
+  Trainer t(*m, o, norm);
+  t.run_epoch(data);
+  save_checkpoint(path, *m, norm, &t);
+}
+}  // namespace
+
+TEST_CASE("checkpoint metadata is validated: non-finite or out-of-range hyperparameters are refused by name") {
+  const std::string good = tmp_path("meta_good"), bad = tmp_path("meta_bad");
+  save_trained(good);
+  const CheckpointFile f = read_checkpoint_file(good);
+  auto resume = [&](const std::string& key, const std::string& value) {
+    CheckpointFile e = f;
+    e.metadata[key] = value;
+    write_checkpoint_file(bad, e);  // a valid checksum over the edited value
+    LoadedModel l = load_checkpoint(bad);
+    Trainer t(*l.model, TrainOptions{}, l.norm);
+    restore_training_state(l.file, t, bad);
+  };
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"lr", "nan"}, {"lr", "inf"}, {"lr", "-0.1"}, {"lr", "0.001x"}, {"epoch", "-3"}, {"epoch", "1e20"},
+           {"epoch", "2.5"}, {"adam_steps", ""}, {"plateau_best", "nan"}, {"plateau_has_best", "yes"},
+           {"plateau_bad_epochs", "-1"}, {"target_scale", "abc"}, {"target_scale", "0"}}) {
+    INFO(key << " = '" << value << "'");
+    CHECK_THROWS_WITH(resume(key, value), Catch::Contains("checkpoint '" + bad + "'") &&
+                                              Catch::Contains("metadata '" + key + "' = '" + value + "'"));
+  }
+  CHECK_NOTHROW(resume("lr", "0.0005"));
+  std::remove(good.c_str());
+  std::remove(bad.c_str());
+}
+
+TEST_CASE("the checkpoint checksum does not depend on the order of tensors in the file") {
+  const std::string a = tmp_path("order_a"), b = tmp_path("order_b");
+  save_trained(a);
+  CheckpointFile f = read_checkpoint_file(a);
+  std::reverse(f.tensors.begin(), f.tensors.end());  // other order, other offsets
+  f.metadata.erase("checksum");
+  write_checkpoint_file(b, f);
+  CHECK(read_checkpoint_file(b).metadata.at("checksum") == read_checkpoint_file(a).metadata.at("checksum"));
+  CHECK(slurp(a) != slurp(b));
+  LoadedModel l = load_checkpoint(b);
+  Trainer t(*l.model, TrainOptions{}, l.norm);
+  CHECK_NOTHROW(restore_training_state(l.file, t, b));
+  std::remove(a.c_str());
+  std::remove(b.c_str());
+}
+
+// Driven by tests/python/resave_checkpoint.py (ctest checkpoint_python_resave):
+// writes a resumable checkpoint to $GATCORE_CKPT, or checks that the file
+// Python re-saved ($GATCORE_CKPT_RESAVED) holds the same model and state.
+TEST_CASE("python resave: write", "[.python-write]") {
+  const char* p = std::getenv("GATCORE_CKPT");
+  REQUIRE(p);
+  save_trained(p);
+}
+
+TEST_CASE("python resave: read", "[.python-read]") {
+  const char* p = std::getenv("GATCORE_CKPT");
+  const char* q = std::getenv("GATCORE_CKPT_RESAVED");
+  REQUIRE(p);
+  REQUIRE(q);
+  REQUIRE(slurp(p) != slurp(q));  // really a different file layout
+  const CheckpointFile a = read_checkpoint_file(p), b = read_checkpoint_file(q);
+  CHECK(a.metadata == b.metadata);
+  REQUIRE(a.tensors.size() == b.tensors.size());
+  for (const auto& [name, t] : a.tensors) {
+    const Tensor* u = b.find(name);
+    REQUIRE(u);
+    REQUIRE(u->same_shape(t));
+    for (std::int64_t r = 0; r < t.rows(); ++r)
+      for (std::int64_t c = 0; c < t.cols(); ++c) CHECK(u->at(r, c) == t.at(r, c));
+  }
+  LoadedModel l = load_checkpoint(q);
+  Trainer t(*l.model, TrainOptions{}, l.norm);
+  CHECK_NOTHROW(restore_training_state(l.file, t, q));
 }

@@ -48,6 +48,10 @@ TEST_CASE("tensor: factories, shape, 64-byte alignment", "[tensor]") {
 TEST_CASE("tensor: construction errors", "[tensor][errors]") {
   REQUIRE_THROWS_AS(Tensor::empty(-1, 3), InvalidArgument);
   REQUIRE_THROWS_WITH(Tensor::zeros(2, -3), Contains("negative shape"));
+  // Shapes read from files: the element count or byte count would wrap.
+  REQUIRE_THROWS_WITH(Tensor::empty(std::int64_t(1) << 62, 4), Contains("shape [4611686018427387904, 4] is too large"));
+  REQUIRE_THROWS_WITH(Tensor::empty(std::int64_t(1) << 32, std::int64_t(1) << 32), Contains("too large"));
+  REQUIRE_THROWS_WITH(Tensor::from(std::int64_t(1) << 62, 4, std::vector<float>{}), Contains("too large"));
   REQUIRE_THROWS_WITH(Tensor::from(2, 3, {1, 2}), Contains("2 values given for shape [2, 3]"));
   REQUIRE_THROWS_WITH(Tensor::from_i32(1, 2, {1, 2, 3}), Contains("3 values given for shape [1, 2]"));
   Tensor f = Tensor::zeros(2, 2), i = Tensor::zeros(2, 2, DType::i32);

@@ -87,8 +87,8 @@ int gat::cmd_eval(int argc, char** argv) {
     std::fprintf(stderr, "gat eval: --model FILE is required\n");
     return usage(2);
   }
-  if (samples < 1) {
-    std::fprintf(stderr, "gat eval: --samples must be positive\n");
+  if (samples < 1 || samples > 1000000) {
+    std::fprintf(stderr, "gat eval: --samples expects [1, 1000000] (got %ld)\n", samples);
     return 2;
   }
   if (poses < 0 || poses > 100000 || size < 16 || size > 8192) {

@@ -17,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gatcore/atomic_file.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
@@ -66,19 +67,7 @@ struct Acc {
   double mean() const { return count ? sum / double(count) : 0.0; }
 };
 
-void write_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
-    f << text;
-    f.flush();
-    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  GATCORE_CHECK(!ec, path, ": cannot replace the file: ", ec.message());
-}
+void write_atomic(const std::string& path, const std::string& text) { gatcore::write_file_atomic(path, text); }
 
 std::string stem(const std::string& p) { return fs::path(p).stem().string(); }
 

@@ -1,26 +1,51 @@
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/backend.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
+#include <optional>
+#include <set>
 #include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "gatcore/atomic_file.hpp"
 
 namespace gatcore::models {
 namespace {
 
+// ordered_json: tensors keep their file order, metadata is written first.
+using json = nlohmann::ordered_json;
+
 constexpr const char* kFormat = "gatcore-checkpoint";
-constexpr const char* kVersion = "1";
+// 2: the checksum covers the metadata and every tensor's name, shape and
+// data, independently of the order and offsets in the file (version 1 covered
+// the data section only, so an edited header went unnoticed).
+constexpr const char* kVersion = "2";
+// safetensors' own limit on the header: a bigger length is a corrupted file.
+constexpr std::uint64_t kMaxHeader = 100u << 20;
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
   throw CheckpointError("checkpoint '" + path + "': " + what);
 }
 
-std::uint64_t fnv1a(const unsigned char* p, std::size_t n) {
+struct Fnv1a {
   std::uint64_t h = 1469598103934665603ull;
-  for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  return h;
-}
+  void add(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  }
+  void add_str(const std::string& s) { add(s.data(), s.size() + 1); }  // with its NUL: "ab"+"c" != "a"+"bc"
+  void add_u64(std::uint64_t v) {
+    unsigned char b[8];
+    for (int k = 0; k < 8; ++k) b[k] = static_cast<unsigned char>(v >> (8 * k));
+    add(b, 8);
+  }
+};
 
 std::string hex(std::uint64_t v) {
   char buf[17];
@@ -28,140 +53,35 @@ std::string hex(std::uint64_t v) {
   return buf;
 }
 
-std::string json_string(const std::string& s) {
-  std::string o = "\"";
-  for (unsigned char c : s) {
-    switch (c) {
-      case '"': o += "\\\""; break;
-      case '\\': o += "\\\\"; break;
-      case '\n': o += "\\n"; break;
-      case '\t': o += "\\t"; break;
-      case '\r': o += "\\r"; break;
-      default:
-        if (c < 0x20) {
-          char b[8];
-          std::snprintf(b, sizeof b, "\\u%04x", c);
-          o += b;
-        } else {
-          o += char(c);
-        }
-    }
+// The checksum of a checkpoint: every metadata entry but "checksum" (sorted by
+// key), then every tensor sorted by name: name, shape, row-major f32 bytes.
+// Independent of the tensors' order in the file, so a file re-saved by
+// Python's safetensors with the same metadata still verifies.
+std::string checksum(const std::map<std::string, std::string>& meta,
+                     const std::vector<std::pair<std::string, Tensor>>& tensors) {
+  Fnv1a h;
+  for (const auto& [k, v] : meta)
+    if (k != "checksum") h.add_str(k), h.add_str(v);
+  std::vector<const std::pair<std::string, Tensor>*> order;
+  for (const auto& t : tensors) order.push_back(&t);
+  std::sort(order.begin(), order.end(), [](auto* a, auto* b) { return a->first < b->first; });
+  for (const auto* t : order) {
+    h.add_str(t->first);
+    h.add_u64(std::uint64_t(t->second.rows()));
+    h.add_u64(std::uint64_t(t->second.cols()));
+    for (std::int64_t r = 0; r < t->second.rows(); ++r) h.add(t->second.row(r), std::size_t(t->second.cols()) * sizeof(float));
   }
-  return o + "\"";
+  return hex(h.h);
 }
-
-// A minimal JSON reader for the safetensors header: objects, arrays, strings,
-// non-negative integers.
-struct Json {
-  enum Kind { object, array, string, number } kind = string;
-  std::vector<std::pair<std::string, Json>> members;
-  std::vector<Json> items;
-  std::string str;
-  std::uint64_t num = 0;
-  const Json* get(const std::string& k) const {
-    for (const auto& m : members)
-      if (m.first == k) return &m.second;
-    return nullptr;
-  }
-};
-
-struct Parser {
-  const std::string& s;
-  std::size_t i = 0;
-  std::string err;
-  void ws() {
-    while (i < s.size() && (s[i] == ' ' || s[i] == '\n' || s[i] == '\t' || s[i] == '\r')) ++i;
-  }
-  bool expect(char c) {
-    ws();
-    if (i < s.size() && s[i] == c) {
-      ++i;
-      return true;
-    }
-    err = detail::cat("expected '", c, "' at header byte ", i);
-    return false;
-  }
-  bool parse_string(std::string& out) {
-    if (!expect('"')) return false;
-    while (i < s.size() && s[i] != '"') {
-      char c = s[i++];
-      if (c == '\\') {
-        if (i >= s.size()) break;
-        char e = s[i++];
-        if (e == 'n') c = '\n';
-        else if (e == 't') c = '\t';
-        else if (e == 'r') c = '\r';
-        else if (e == 'u') {
-          if (i + 4 > s.size()) break;
-          c = char(std::strtol(s.substr(i, 4).c_str(), nullptr, 16));
-          i += 4;
-        } else c = e;
-      }
-      out += c;
-    }
-    return expect('"');
-  }
-  bool parse(Json& j, int depth = 0) {
-    if (depth > 8) {
-      err = "header nested too deeply";
-      return false;
-    }
-    ws();
-    if (i >= s.size()) {
-      err = "header ends early";
-      return false;
-    }
-    if (s[i] == '{') {
-      ++i;
-      j.kind = Json::object;
-      ws();
-      if (i < s.size() && s[i] == '}') return ++i, true;
-      for (;;) {
-        std::string k;
-        Json v;
-        if (!parse_string(k) || !expect(':') || !parse(v, depth + 1)) return false;
-        j.members.emplace_back(std::move(k), std::move(v));
-        ws();
-        if (i < s.size() && s[i] == ',') {
-          ++i;
-          continue;
-        }
-        return expect('}');
-      }
-    }
-    if (s[i] == '[') {
-      ++i;
-      j.kind = Json::array;
-      ws();
-      if (i < s.size() && s[i] == ']') return ++i, true;
-      for (;;) {
-        Json v;
-        if (!parse(v, depth + 1)) return false;
-        j.items.push_back(std::move(v));
-        ws();
-        if (i < s.size() && s[i] == ',') {
-          ++i;
-          continue;
-        }
-        return expect(']');
-      }
-    }
-    if (s[i] == '"') {
-      j.kind = Json::string;
-      return parse_string(j.str);
-    }
-    if (s[i] >= '0' && s[i] <= '9') {
-      j.kind = Json::number;
-      while (i < s.size() && s[i] >= '0' && s[i] <= '9') j.num = j.num * 10 + std::uint64_t(s[i++] - '0');
-      return true;
-    }
-    err = detail::cat("unexpected character '", s[i], "' at header byte ", i);
-    return false;
-  }
-};
 
 void put_u64(std::string& out, std::uint64_t v) {
   for (int k = 0; k < 8; ++k) out += char((v >> (8 * k)) & 0xff);
+}
+
+// A non-negative JSON integer, or nullopt (a float, a negative number, a string).
+std::optional<std::uint64_t> unsigned_of(const json& j) {
+  if (!j.is_number_unsigned()) return std::nullopt;
+  return j.get<std::uint64_t>();
 }
 
 }  // namespace
@@ -172,110 +92,124 @@ const Tensor* CheckpointFile::find(const std::string& name) const {
   return nullptr;
 }
 
-void write_checkpoint_file(const std::string& path, const CheckpointFile& f) {
-  std::string data;
-  std::string tensors_json;
+std::string checkpoint_bytes(const CheckpointFile& f) {
+  std::set<std::string> names;
   for (const auto& [name, t] : f.tensors) {
     GATCORE_CHECK(t.defined() && t.dtype() == DType::f32, "checkpoint: tensor '", name, "' is not a defined f32 tensor");
     GATCORE_CHECK(name != "__metadata__", "checkpoint: reserved tensor name");
-    const std::size_t begin = data.size();
-    for (std::int64_t r = 0; r < t.rows(); ++r)
-      data.append(reinterpret_cast<const char*>(t.row(r)), std::size_t(t.cols()) * sizeof(float));
-    tensors_json += "," + json_string(name) + ":{\"dtype\":\"F32\",\"shape\":[" + std::to_string(t.rows()) + "," +
-                    std::to_string(t.cols()) + "],\"data_offsets\":[" + std::to_string(begin) + "," +
-                    std::to_string(data.size()) + "]}";
+    GATCORE_CHECK(names.insert(name).second, "checkpoint: tensor '", name, "' given twice");
   }
   std::map<std::string, std::string> meta = f.metadata;
   meta["format"] = kFormat;
   meta["format_version"] = kVersion;
-  meta["checksum"] = hex(fnv1a(reinterpret_cast<const unsigned char*>(data.data()), data.size()));
-  // "format" first, so the magic sits at a fixed place at the file start.
-  std::string header = "{\"__metadata__\":{\"format\":" + json_string(kFormat);
-  for (const auto& [k, v] : meta)
-    if (k != "format") header += "," + json_string(k) + ":" + json_string(v);
-  header += "}" + tensors_json + "}";
-  while (header.size() % 8) header += ' ';
+  meta["checksum"] = checksum(meta, f.tensors);
+  json header = json::object();
+  header["__metadata__"] = json(meta);
+  std::string data;
+  for (const auto& [name, t] : f.tensors) {
+    const std::size_t begin = data.size();
+    for (std::int64_t r = 0; r < t.rows(); ++r)
+      data.append(reinterpret_cast<const char*>(t.row(r)), std::size_t(t.cols()) * sizeof(float));
+    header[name] = {{"dtype", "F32"}, {"shape", {t.rows(), t.cols()}}, {"data_offsets", {begin, data.size()}}};
+  }
+  std::string text = header.dump();
+  while (text.size() % 8) text += ' ';
   std::string out;
-  put_u64(out, header.size());
-  out += header;
+  put_u64(out, text.size());
+  out += text;
   out += data;
+  return out;
+}
 
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
-    if (!os) fail(path, "cannot open '" + tmp + "' for writing");
-    os.write(out.data(), std::streamsize(out.size()));
-    os.flush();
-    if (!os) {
-      std::remove(tmp.c_str());
-      fail(path, "write to '" + tmp + "' failed (disk full?)");
-    }
+void write_checkpoint_file(const std::string& path, const CheckpointFile& f) {
+  const std::string bytes = checkpoint_bytes(f);
+  try {
+    write_file_atomic(path, bytes);
+  } catch (const Error& e) {
+    throw CheckpointError(std::string("checkpoint ") + e.what());
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    fail(path, "cannot rename '" + tmp + "' to it: " + std::strerror(errno));
+}
+
+CheckpointFile parse_checkpoint(std::string_view bytes, const std::string& path) {
+  if (bytes.size() < 8) fail(path, detail::cat("truncated: ", bytes.size(), " bytes, not even a header length"));
+  std::uint64_t n = 0;
+  for (int k = 0; k < 8; ++k) n |= std::uint64_t(static_cast<unsigned char>(bytes[std::size_t(k)])) << (8 * k);
+  if (bytes.size() == 8 || bytes[8] != '{')
+    fail(path, "not a safetensors file (no JSON header after the 8-byte length), so not a gatcore checkpoint");
+  if (n > kMaxHeader) fail(path, detail::cat("corrupted: header length ", n, " bytes (at most ", kMaxHeader, ")"));
+  if (n > bytes.size() - 8)
+    fail(path, detail::cat("truncated: the header needs ", n, " bytes, the file has ", bytes.size() - 8, " after the length"));
+  const std::string_view text = bytes.substr(8, std::size_t(n));
+  const json root = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
+  if (root.is_discarded()) fail(path, "corrupted header: not valid JSON");
+  if (!root.is_object()) fail(path, "corrupted header: not a JSON object");
+  CheckpointFile f;
+  const auto meta = root.find("__metadata__");
+  if (meta == root.end() || !meta->is_object())
+    fail(path, "not a gatcore checkpoint: a safetensors file without __metadata__ (expected \"format\": \"gatcore-checkpoint\")");
+  for (const auto& [k, v] : meta->items()) {
+    if (!v.is_string()) fail(path, "corrupted header: metadata '" + k + "' is not a string");
+    f.metadata[k] = v.get<std::string>();
   }
+  if (f.metadata["format"] != kFormat)
+    fail(path, "not a gatcore checkpoint: metadata \"format\" is '" + f.metadata["format"] + "', expected '" + kFormat + "'");
+  if (f.metadata["format_version"] != kVersion)
+    fail(path, "unsupported format version '" + f.metadata["format_version"] + "' (this build reads version " + kVersion +
+                   (f.metadata["format_version"] == "1" ? "; version 1 checksums did not cover the header" : "") + ")");
+  const std::size_t data_begin = 8 + std::size_t(n);
+  const std::uint64_t data_size = bytes.size() - data_begin;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> spans;
+  for (const auto& [name, v] : root.items()) {
+    if (name == "__metadata__") continue;
+    if (!v.is_object()) fail(path, "tensor '" + name + "': not an object");
+    const auto dt = v.find("dtype");
+    const auto shape = v.find("shape");
+    const auto off = v.find("data_offsets");
+    if (dt == v.end() || !dt->is_string() || dt->get<std::string>() != "F32")
+      fail(path, "tensor '" + name + "': dtype must be F32");
+    if (shape == v.end() || !shape->is_array() || shape->size() != 2 || off == v.end() || !off->is_array() ||
+        off->size() != 2)
+      fail(path, "tensor '" + name + "': shape must be [rows, cols] and data_offsets [begin, end]");
+    const auto r = unsigned_of((*shape)[0]), c = unsigned_of((*shape)[1]);
+    const auto b = unsigned_of((*off)[0]), e = unsigned_of((*off)[1]);
+    if (!r || !c || !b || !e) fail(path, "tensor '" + name + "': shape and data_offsets must be non-negative integers");
+    // Bounded by the file before any product is formed: no wrap-around.
+    if (*e > data_size || *b > *e)
+      fail(path, detail::cat("tensor '", name, "': data_offsets [", *b, ", ", *e, ") outside the ", data_size,
+                             "-byte data section (truncated or corrupted)"));
+    const std::uint64_t elems = (*e - *b) / sizeof(float);
+    if ((*e - *b) % sizeof(float) != 0 || (*c == 0 ? elems != 0 : (*r > elems / *c || *r * *c != elems)))
+      fail(path, detail::cat("tensor '", name, "': data_offsets [", *b, ", ", *e, ") do not match shape [", *r, ", ",
+                             *c, "]"));
+    if (*r > std::uint64_t(std::numeric_limits<std::int64_t>::max()) ||
+        *c > std::uint64_t(std::numeric_limits<std::int64_t>::max()))
+      fail(path, detail::cat("tensor '", name, "': shape [", *r, ", ", *c, "] out of range"));
+    spans.emplace_back(*b, *e);
+    Tensor t = Tensor::empty(std::int64_t(*r), std::int64_t(*c));
+    if (elems != 0) std::memcpy(t.data(), bytes.data() + data_begin + *b, *e - *b);
+    f.tensors.emplace_back(name, t);
+  }
+  // safetensors: the tensors tile the data section, no gaps, no overlaps.
+  std::sort(spans.begin(), spans.end());
+  std::uint64_t at = 0;
+  for (const auto& [b, e] : spans) {
+    if (b != at) fail(path, detail::cat("corrupted: data bytes [", std::min(b, at), ", ", std::max(b, at), ") ",
+                                        b > at ? "belong to no tensor" : "belong to two tensors"));
+    at = e;
+  }
+  if (at != data_size) fail(path, detail::cat("corrupted: ", data_size - at, " trailing bytes after the last tensor"));
+  const std::string sum = checksum(f.metadata, f.tensors);
+  if (f.metadata["checksum"] != sum)
+    fail(path, "corrupted: checksum mismatch (stored '" + f.metadata["checksum"] + "', header and data give " + sum + ")");
+  return f;
 }
 
 CheckpointFile read_checkpoint_file(const std::string& path) {
   std::ifstream is(path, std::ios::binary);
   if (!is) fail(path, std::string("cannot open: ") + std::strerror(errno));
   std::string bytes((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
-  if (bytes.size() < 8) fail(path, detail::cat("truncated: ", bytes.size(), " bytes, not even a header length"));
-  std::uint64_t n = 0;
-  for (int k = 0; k < 8; ++k) n |= std::uint64_t(static_cast<unsigned char>(bytes[std::size_t(k)])) << (8 * k);
-  const std::string magic = "{\"__metadata__\":{\"format\":\"gatcore-checkpoint\"";
-  if (bytes.compare(8, magic.size(), magic) != 0) {
-    if (bytes.size() >= 9 && bytes[8] == '{' && n <= bytes.size() - 8)
-      fail(path, "wrong magic: a safetensors file, but not a gatcore checkpoint");
-    if (bytes.size() < 8 + magic.size() && magic.compare(0, bytes.size() - 8, bytes, 8, std::string::npos) == 0)
-      fail(path, detail::cat("truncated: ", bytes.size(), " bytes"));
-    fail(path, "wrong magic: not a gatcore checkpoint (expected a safetensors header starting with "
-               "{\"__metadata__\":{\"format\":\"gatcore-checkpoint\")");
-  }
-  if (n > bytes.size() - 8)
-    fail(path, detail::cat("truncated: the header needs ", n, " bytes, the file has ", bytes.size() - 8, " after the length"));
-  const std::string header = bytes.substr(8, std::size_t(n));
-  Json root;
-  Parser p{header, 0, {}};
-  if (!p.parse(root) || root.kind != Json::object) fail(path, "corrupted header: " + (p.err.empty() ? "not an object" : p.err));
-  CheckpointFile f;
-  const Json* meta = root.get("__metadata__");
-  if (!meta || meta->kind != Json::object) fail(path, "corrupted header: no __metadata__ object");
-  for (const auto& [k, v] : meta->members) {
-    if (v.kind != Json::string) fail(path, "corrupted header: metadata '" + k + "' is not a string");
-    f.metadata[k] = v.str;
-  }
-  if (f.metadata["format_version"] != kVersion)
-    fail(path, "unsupported format version '" + f.metadata["format_version"] + "' (this build reads version " + kVersion + ")");
-  const std::size_t data_begin = 8 + std::size_t(n);
-  const std::size_t data_size = bytes.size() - data_begin;
-  std::size_t max_end = 0;
-  for (const auto& [name, v] : root.members) {
-    if (name == "__metadata__") continue;
-    const Json* dt = v.get("dtype");
-    const Json* shape = v.get("shape");
-    const Json* off = v.get("data_offsets");
-    if (!dt || dt->str != "F32") fail(path, "tensor '" + name + "': dtype must be F32");
-    if (!shape || shape->kind != Json::array || shape->items.size() != 2 || !off || off->kind != Json::array ||
-        off->items.size() != 2)
-      fail(path, "tensor '" + name + "': corrupted shape or data_offsets");
-    const std::uint64_t r = shape->items[0].num, c = shape->items[1].num;
-    const std::uint64_t b = off->items[0].num, e = off->items[1].num;
-    if (e < b || e - b != r * c * sizeof(float))
-      fail(path, detail::cat("tensor '", name, "': data_offsets [", b, ", ", e, ") do not match shape [", r, ", ", c, "]"));
-    if (e > data_size)
-      fail(path, detail::cat("truncated: tensor '", name, "' ends at data byte ", e, ", the file has ", data_size));
-    max_end = std::max<std::size_t>(max_end, e);
-    Tensor t = Tensor::empty(std::int64_t(r), std::int64_t(c));
-    if (r != 0 && c != 0) std::memcpy(t.data(), bytes.data() + data_begin + b, e - b);
-    f.tensors.emplace_back(name, t);
-  }
-  if (max_end != data_size) fail(path, detail::cat("corrupted: ", data_size - max_end, " trailing bytes after the last tensor"));
-  const std::string sum = hex(fnv1a(reinterpret_cast<const unsigned char*>(bytes.data() + data_begin), data_size));
-  if (f.metadata["checksum"] != sum)
-    fail(path, "corrupted: checksum mismatch (stored " + f.metadata["checksum"] + ", data " + sum + ")");
-  return f;
+  if (is.bad()) fail(path, "read error");
+  return parse_checkpoint(bytes, path);
 }
 
 namespace {
@@ -285,6 +219,35 @@ std::string float_str(double v) {
   os.precision(17);
   os << v;
   return os.str();
+}
+
+// Metadata numbers, strictly: the whole string, finite, within [lo, hi];
+// otherwise an error naming the key and the value (never std::stof's bare
+// "stof", never a NaN learning rate resumed into an all-NaN model).
+double meta_number(const std::map<std::string, std::string>& meta, const std::string& key, double lo, double hi,
+                   const std::string& path) {
+  const auto it = meta.find(key);
+  if (it == meta.end()) fail(path, "metadata '" + key + "' is missing");
+  const std::string& s = it->second;
+  char* end = nullptr;
+  errno = 0;
+  const double v = s.empty() || std::isspace(static_cast<unsigned char>(s[0])) ? NAN : std::strtod(s.c_str(), &end);
+  if (!end || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
+    fail(path, detail::cat("metadata '", key, "' = '", s, "' is not a finite number in [", lo, ", ", hi, "]"));
+  return v;
+}
+
+std::int64_t meta_integer(const std::map<std::string, std::string>& meta, const std::string& key, std::int64_t lo,
+                          std::int64_t hi, const std::string& path) {
+  const double v = meta_number(meta, key, double(lo), double(hi), path);
+  if (v != std::floor(v)) fail(path, detail::cat("metadata '", key, "' = '", meta.at(key), "' is not an integer"));
+  return std::int64_t(v);
+}
+
+bool meta_flag(const std::map<std::string, std::string>& meta, const std::string& key, const std::string& path) {
+  const std::string& s = meta.at(key);
+  if (s != "0" && s != "1") fail(path, "metadata '" + key + "' = '" + s + "' is not 0 or 1");
+  return s == "1";
 }
 
 std::string rng_str(nn::Rng& r) {
@@ -342,7 +305,12 @@ LoadedModel load_checkpoint(const std::string& path) {
   } catch (const Error& e) {
     fail(path, std::string("bad model configuration: ") + e.what());
   }
-  std::unique_ptr<Model> m = make_model(cfg, 0);
+  std::unique_ptr<Model> m;
+  try {
+    m = make_model(cfg, 0);
+  } catch (const Error& e) {
+    fail(path, std::string("bad model configuration: ") + e.what());
+  }
   const auto& reg = m->registry();
   auto known = [&](const std::string& name) {
     return reg.find_param(name) || reg.find_buffer(name) || name == "norm.mean" || name == "norm.inv_std" ||
@@ -367,7 +335,8 @@ LoadedModel load_checkpoint(const std::string& path) {
     out.norm.mean = *mean;
     out.norm.inv_std = *inv;
   }
-  if (auto ts = f.metadata.find("target_scale"); ts != f.metadata.end()) out.norm.target_scale = std::stof(ts->second);
+  if (f.metadata.count("target_scale"))
+    out.norm.target_scale = float(meta_number(f.metadata, "target_scale", 1e-30, 1e30, path));
   if (auto r = f.metadata.find("model_rng"); r != f.metadata.end()) {
     std::istringstream is(r->second);
     is >> m->rng().engine();
@@ -395,18 +364,16 @@ void restore_training_state(const CheckpointFile& f, Trainer& t, const std::stri
       else backend(dst.device()).copy(to(*src, dst.device()), dst);  // uploaded explicitly
     }
   }
-  try {
-    t.set_epoch(std::stoi(meta("epoch")));
-    t.optimiser().set_lr(std::stof(meta("lr")));
-    t.optimiser().set_steps(std::stol(meta("adam_steps")));
-    t.plateau().best = std::stof(meta("plateau_best"));
-    t.plateau().has_best = meta("plateau_has_best") == "1";
-    t.plateau().bad_epochs = std::stoi(meta("plateau_bad_epochs"));
-    // Absent in checkpoints written before the key existed.
-    t.plateau().on_validation = f.metadata.count("plateau_on_validation") && f.metadata.at("plateau_on_validation") == "1";
-  } catch (const std::logic_error&) {
-    fail(path, "corrupted training state in the metadata");
-  }
+  for (const char* k : {"epoch", "lr", "adam_steps", "plateau_best", "plateau_has_best", "plateau_bad_epochs"}) meta(k);
+  const auto& m = f.metadata;
+  t.set_epoch(int(meta_integer(m, "epoch", 0, std::numeric_limits<int>::max(), path)));
+  t.optimiser().set_lr(float(meta_number(m, "lr", 0.0, 1e6, path)));
+  t.optimiser().set_steps(meta_integer(m, "adam_steps", 0, std::int64_t(1) << 52, path));
+  t.plateau().best = float(meta_number(m, "plateau_best", -3e38, 3e38, path));
+  t.plateau().has_best = meta_flag(m, "plateau_has_best", path);
+  t.plateau().bad_epochs = int(meta_integer(m, "plateau_bad_epochs", 0, std::numeric_limits<int>::max(), path));
+  // Absent in checkpoints written before the key existed.
+  t.plateau().on_validation = m.count("plateau_on_validation") && meta_flag(m, "plateau_on_validation", path);
   std::istringstream is(meta("rng"));
   is >> t.rng().engine();
   if (!is) fail(path, "corrupted rng state");

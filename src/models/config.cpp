@@ -2,6 +2,8 @@
 
 #include <cstdlib>
 #include <functional>
+#include <cerrno>
+#include <cmath>
 #include <sstream>
 
 #include "gatcore/error.hpp"
@@ -51,11 +53,16 @@ struct Field {
   std::function<bool(ModelConfig&, const std::string&)> set;
 };
 
+// Sizes and counts: configurations come from checkpoint files, so a value
+// past any real layer width (and past int) is refused rather than cast.
+constexpr std::int64_t kMaxConfigInt = 1 << 16;
+
 bool parse_i64(const std::string& s, std::int64_t& out) {
   if (s.empty()) return false;
   char* end = nullptr;
+  errno = 0;
   out = std::strtoll(s.c_str(), &end, 10);
-  return *end == 0;
+  return *end == 0 && errno == 0 && out >= -kMaxConfigInt && out <= kMaxConfigInt;
 }
 
 template <class T>
@@ -79,7 +86,7 @@ Field float_field(const char* key, float ModelConfig::*m) {
           [m](ModelConfig& c, const std::string& v) {
             char* end = nullptr;
             c.*m = std::strtof(v.c_str(), &end);
-            return !v.empty() && *end == 0;
+            return !v.empty() && *end == 0 && std::isfinite(c.*m);
           }};
 }
 Field bool_field(const char* key, bool ModelConfig::*m) {

@@ -135,7 +135,6 @@ void copy_buffer(VkBuffer src, std::uint64_t src_off, VkBuffer dst, std::uint64_
 void flush();
 bool has_pending_work();
 vulkan::Stats& stats_ref();
-void destroy_stream();
 
 // ---- graphs.cpp ----------------------------------------------------------------
 // Device copy of a CsrGraph's arrays as int32: indptr, indices, out_ptr,

@@ -40,7 +40,12 @@ struct Stream {
   std::size_t addr_cur = 0;
   std::uint64_t addr_used = 0;  // bytes used in addr_bufs[addr_cur]
 };
-Stream g_s;
+// Never destroyed, like the buffer cache (allocator.cpp): the device is never
+// torn down before process exit (tensors in static objects may still release
+// buffers then), so the stream's command pool, descriptor pools and address
+// tables stay reachable to the end instead of leaking when a static Stream's
+// vectors were destroyed under them.
+Stream& g_s = *new Stream;
 vulkan::Stats g_stats;
 
 constexpr std::uint32_t kSetsPerPool = 1024;
@@ -245,17 +250,6 @@ void flush() {
   g_s.addr_cur = 0;
   g_s.addr_used = 0;
   recycle_pending_buffers();
-}
-
-void destroy_stream() {
-  if (!has_ctx()) return;
-  flush();
-  Context& c = ctx();
-  for (Buffer* b : g_s.addr_bufs) release_buffer(b);
-  for (VkDescriptorPool p : g_s.desc_pools) vkDestroyDescriptorPool(c.device, p, nullptr);
-  if (g_s.fence) vkDestroyFence(c.device, g_s.fence, nullptr);
-  if (g_s.pool) vkDestroyCommandPool(c.device, g_s.pool, nullptr);
-  g_s = Stream{};
 }
 
 }  // namespace gatcore::vk

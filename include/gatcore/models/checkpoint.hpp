@@ -4,10 +4,10 @@
 // the header's "__metadata__" block.
 //
 // Layout (all integers little-endian):
-//   u64 N                      header length in bytes
+//   u64 N                      header length in bytes (at most 100 MiB)
 //   N bytes                    JSON header, space-padded to a multiple of 8:
-//     {"__metadata__": {"format": "gatcore-checkpoint", "format_version": "1",
-//                       "checksum": "<FNV-1a 64 of the data section, hex>",
+//     {"__metadata__": {"format": "gatcore-checkpoint", "format_version": "2",
+//                       "checksum": "<FNV-1a 64, hex; see below>",
 //                       "config": "<ModelConfig::to_text()>", ...},
 //      "<tensor name>": {"dtype": "F32", "shape": [rows, cols], "data_offsets": [begin, end]}, ...}
 //   data section               raw row-major float32 tensors at their offsets
@@ -18,14 +18,23 @@
 // model_rng, plateau_best, plateau_has_best, plateau_bad_epochs, and any extra
 // entries of the caller (e.g. skeleton bone names).
 //
-// Writes go to "<path>.tmp" and are renamed over `path` (atomic on POSIX).
-// Reading checks the magic (format key), version, sizes, offsets, the
-// checksum, and every tensor's name and shape against the model; errors are
-// CheckpointError naming the file and the problem. A model is returned only
-// if everything loaded.
+// A file is recognised as a checkpoint by its metadata "format" key, not by a
+// byte prefix. The checksum covers every metadata entry but itself (sorted by
+// key) and every tensor sorted by name (name, shape, data), so it does not
+// depend on the order or offsets of tensors in the file: a checkpoint re-saved
+// by Python (`safetensors.*.save_file(load_file(x), metadata=...)` with the
+// same metadata) still loads, and an edited header (lr, epoch, ...) does not.
+// Metadata numbers are parsed strictly (whole string, finite, in range).
+//
+// Writes are atomic (write_file_atomic: temp file, fsync, rename). Reading
+// checks the format key, version, sizes, offsets (the tensors must tile the
+// data section), the checksum, and every tensor's name and shape against the
+// model; errors are CheckpointError naming the file and the problem. A model
+// is returned only if everything loaded.
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "gatcore/models/train.hpp"
@@ -45,6 +54,9 @@ struct CheckpointFile {
 
 void write_checkpoint_file(const std::string& path, const CheckpointFile& f);
 CheckpointFile read_checkpoint_file(const std::string& path);
+// The same, in memory (`path` only names the source in errors).
+std::string checkpoint_bytes(const CheckpointFile& f);
+CheckpointFile parse_checkpoint(std::string_view bytes, const std::string& path);
 
 // Saves the model (parameters + buffers), the normaliser and, if `trainer`
 // is given, the state to resume training. The model may live on any device

@@ -1,6 +1,8 @@
 // The dataset description file (JSON, through nlohmann-json).
 #include <filesystem>
 #include <fstream>
+#include <type_traits>
+#include <cmath>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -10,6 +12,7 @@
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
+#include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -19,11 +22,41 @@ DatasetDescription describe_dataset(std::vector<std::string> characters, std::ve
   DatasetDescription d = settings;
   d.characters = std::move(characters);
   d.motions = std::move(motions);
-  GATCORE_CHECK(!d.characters.empty(), "dataset: no characters");
-  GATCORE_CHECK(d.random_poses >= 0 && d.motion_stride >= 1 && d.pose_angle >= 0.0f, "dataset: random_poses ",
-                d.random_poses, ", motion_stride ", d.motion_stride, ", pose_angle ", d.pose_angle, " out of range");
+  d.split = {};
+  validate_dataset(d, "dataset");
   d.split = split_by_character(static_cast<std::int32_t>(d.characters.size()), d.validation, d.test, d.seed);
+  validate_dataset(d, "dataset");
   return d;
+}
+
+void validate_dataset(const DatasetDescription& d, const std::string& where) {
+  const DatasetLimits L;
+  auto range = [&](const char* field, double v, double lo, double hi) {
+    GATCORE_CHECK(std::isfinite(v) && v >= lo && v <= hi, where, ": field \"", field, "\" = ", v, " is out of range [",
+                  lo, ", ", hi, "]");
+  };
+  GATCORE_CHECK(!d.characters.empty(), where, ": no characters");
+  range("random_poses", d.random_poses, 0, L.max_random_poses);
+  range("pose_angle", d.pose_angle, 0, L.max_pose_angle);
+  range("motion_stride", d.motion_stride, 1, L.max_motion_stride);
+  range("subsample", double(d.subsample), 0, L.max_subsample);
+  range("validation", d.validation, 0, L.max_fraction);
+  range("test", d.test, 0, L.max_fraction);
+  range("validation + test", double(d.validation) + double(d.test), 0, L.max_fraction);
+  range("reference_deformer.iterations", d.delta_mush.iterations, 0, L.max_dm_iterations);
+  range("reference_deformer.step", d.delta_mush.step, L.min_dm_step, 1);
+  check_distortion_scales(d.distortion_scales, where + ": field \"distortion_scales\"");
+  const auto n = static_cast<std::int64_t>(d.characters.size());
+  std::vector<const char*> role(static_cast<std::size_t>(n), nullptr);
+  for (const auto& [name, v] : {std::pair<const char*, const std::vector<std::int32_t>*>{"train", &d.split.train},
+                                {"validation", &d.split.validation},
+                                {"test", &d.split.test}})
+    for (std::int32_t c : *v) {
+      GATCORE_CHECK(c >= 0 && c < n, where, ": split \"", name, "\" names character ", c, " of ", n);
+      GATCORE_CHECK(!role[std::size_t(c)], where, ": character ", c, " is in split \"", role[std::size_t(c)] ? role[std::size_t(c)] : "",
+                    "\" and again in \"", name, "\"");
+      role[std::size_t(c)] = name;
+    }
 }
 
 namespace {
@@ -51,6 +84,7 @@ std::vector<std::string> resolve(const std::vector<std::string>& entries, const 
 }  // namespace
 
 void save_dataset(const std::string& path, const DatasetDescription& d) {
+  validate_dataset(d, path);
   nlohmann::json j;
   j["format"] = "gatcore-dataset";
   j["version"] = 1;
@@ -67,19 +101,33 @@ void save_dataset(const std::string& path, const DatasetDescription& d) {
   j["validation"] = d.validation;
   j["test"] = d.test;
   j["split"] = {{"train", d.split.train}, {"validation", d.split.validation}, {"test", d.split.test}};
-  // Atomic: a temporary file beside the target, renamed over it.
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
-    f << j.dump(2) << "\n";
-    f.flush();
-    GATCORE_CHECK(f.good(), path, ": cannot write the file (", tmp, ")");
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  GATCORE_CHECK(!ec, path, ": cannot replace the file: ", ec.message());
+  write_file_atomic(path, j.dump(2) + "\n");
 }
+
+namespace {
+
+// A JSON number read into T only after it is known to be finite, within
+// [lo, hi] and (for integer T) whole: nlohmann's get<int>() of 1e20 is an
+// out-of-range float->int conversion (undefined behaviour).
+template <class T>
+T json_number(const nlohmann::json& j, const std::string& field, double lo, double hi, const std::string& path) {
+  GATCORE_CHECK(j.is_number(), path, ": field \"", field, "\" must be a number, got ", j.dump());
+  const double v = j.get<double>();
+  GATCORE_CHECK(std::isfinite(v) && v >= lo && v <= hi, path, ": field \"", field, "\" = ", j.dump(),
+                " is out of range [", lo, ", ", hi, "]");
+  if constexpr (std::is_integral_v<T>)
+    GATCORE_CHECK(v == std::floor(v), path, ": field \"", field, "\" = ", j.dump(), " is not a whole number");
+  return static_cast<T>(v);
+}
+
+std::vector<std::int32_t> json_indices(const nlohmann::json& j, const std::string& field, const std::string& path) {
+  GATCORE_CHECK(j.is_array(), path, ": field \"", field, "\" must be an array");
+  std::vector<std::int32_t> out;
+  for (const auto& x : j) out.push_back(json_number<std::int32_t>(x, field, 0, 2147483647.0, path));
+  return out;
+}
+
+}  // namespace
 
 DatasetDescription load_dataset(const std::string& path) {
   std::ifstream f(path);
@@ -92,35 +140,39 @@ DatasetDescription load_dataset(const std::string& path) {
   }
   try {
     GATCORE_CHECK(j.value("format", "") == "gatcore-dataset", path, ": not a gatcore dataset (\"format\" is not \"gatcore-dataset\")");
-    GATCORE_CHECK(j.value("version", 0) == 1, path, ": unsupported dataset version ", j.value("version", 0));
+    GATCORE_CHECK(j.contains("version") && j.at("version").is_number() && j.at("version") == 1, path,
+                  ": unsupported dataset version ", j.contains("version") ? j.at("version").dump() : "(none)");
     DatasetDescription d;
     d.characters = resolve(j.at("characters").get<std::vector<std::string>>(), path);
     d.motions = resolve(j.at("motions").get<std::vector<std::string>>(), path);
-    d.random_poses = j.at("random_poses").get<int>();
-    d.pose_angle = j.at("pose_angle").get<float>();
+    const DatasetLimits L;
+    d.random_poses = json_number<int>(j.at("random_poses"), "random_poses", 0, L.max_random_poses, path);
+    d.pose_angle = json_number<float>(j.at("pose_angle"), "pose_angle", 0, L.max_pose_angle, path);
     if (j.contains("joint_limits"))
       d.joint_limits = parse_joint_limits(j.at("joint_limits").dump(), path + ": field \"joint_limits\"");
-    d.motion_stride = j.at("motion_stride").get<int>();
-    d.seed = j.at("seed").get<std::uint32_t>();
+    d.motion_stride = json_number<int>(j.at("motion_stride"), "motion_stride", 1, L.max_motion_stride, path);
+    d.seed = json_number<std::uint32_t>(j.at("seed"), "seed", 0, 4294967295.0, path);
     const auto& rd = j.at("reference_deformer");
     GATCORE_CHECK(rd.at("name").get<std::string>() == "delta_mush", path, ": unknown reference deformer ",
                   rd.at("name").dump());
-    d.delta_mush.iterations = rd.at("iterations").get<int>();
-    d.delta_mush.step = rd.at("step").get<float>();
-    d.subsample = j.at("subsample").get<std::int64_t>();
+    d.delta_mush.iterations =
+        json_number<int>(rd.at("iterations"), "reference_deformer.iterations", 0, L.max_dm_iterations, path);
+    d.delta_mush.step = json_number<float>(rd.at("step"), "reference_deformer.step", L.min_dm_step, 1, path);
+    d.subsample = json_number<std::int64_t>(j.at("subsample"), "subsample", 0, L.max_subsample, path);
     // Absent in datasets written before the field: the paper's features only.
     if (j.contains("distortion_scales")) {
-      d.distortion_scales = j.at("distortion_scales").get<std::vector<int>>();
+      GATCORE_CHECK(j.at("distortion_scales").is_array(), path, ": field \"distortion_scales\" must be an array");
+      for (const auto& x : j.at("distortion_scales"))
+        d.distortion_scales.push_back(json_number<int>(x, "distortion_scales", -1e6, 1e6, path));
       check_distortion_scales(d.distortion_scales, path + ": field \"distortion_scales\"");
     }
-    d.validation = j.at("validation").get<float>();
-    d.test = j.at("test").get<float>();
-    d.split.train = j.at("split").at("train").get<std::vector<std::int32_t>>();
-    d.split.validation = j.at("split").at("validation").get<std::vector<std::int32_t>>();
-    d.split.test = j.at("split").at("test").get<std::vector<std::int32_t>>();
-    const auto n = static_cast<std::int32_t>(d.characters.size());
-    for (const auto* v : {&d.split.train, &d.split.validation, &d.split.test})
-      for (std::int32_t c : *v) GATCORE_CHECK(c >= 0 && c < n, path, ": split names character ", c, " of ", n);
+    d.validation = json_number<float>(j.at("validation"), "validation", 0, L.max_fraction, path);
+    d.test = json_number<float>(j.at("test"), "test", 0, L.max_fraction, path);
+    d.split.train = json_indices(j.at("split").at("train"), "split.train", path);
+    d.split.validation = json_indices(j.at("split").at("validation"), "split.validation", path);
+    d.split.test = json_indices(j.at("split").at("test"), "split.test", path);
+    // The same checks as `gat dataset build` (describe_dataset).
+    validate_dataset(d, path);
     return d;
   } catch (const nlohmann::json::exception& e) {
     throw InvalidArgument(detail::cat(path, ": bad dataset description: ", e.what()));

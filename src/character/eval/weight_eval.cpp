@@ -10,6 +10,7 @@
 
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/rig/motion.hpp"
+#include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -192,22 +193,6 @@ std::string weight_eval_json(const std::string& method, const std::vector<Charac
   return j.dump(2) + "\n";
 }
 
-void write_text_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
-    GATCORE_CHECK(os.good(), path, ": cannot open '", tmp, "' for writing");
-    os.write(text.data(), static_cast<std::streamsize>(text.size()));
-    os.flush();
-    if (!os.good()) {
-      std::remove(tmp.c_str());
-      throw InvalidArgument(detail::cat(path, ": write to '", tmp, "' failed (disk full?)"));
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw InvalidArgument(detail::cat(path, ": cannot rename '", tmp, "' to it"));
-  }
-}
+void write_text_atomic(const std::string& path, const std::string& text) { write_file_atomic(path, text); }
 
 }  // namespace gatcore::character

@@ -1,4 +1,16 @@
 // FBX (and other assimp formats) character import.
+//
+// Containment: assimp's importers are not hardened against hostile files
+// (its BVH importer, no longer used, had a heap-use-after-free; issue #20).
+// A user's file is therefore first parsed by assimp in a forked child
+// process (probe_in_child): a crash, a sanitizer report, an abort or a hang
+// (timeout) there ends the child, not gatcore, and the file is refused with
+// a message naming it. Only a file the child parsed cleanly is parsed again
+// in this process (the parse is deterministic). BVH files are read by
+// gatcore's own reader (io/bvh.cpp) and never reach assimp.
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <assimp/Importer.hpp>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
@@ -6,6 +18,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -30,6 +44,59 @@ std::size_t key_before(const Key* keys, unsigned n, double t) {
   return k;
 }
 
+constexpr unsigned kReadFlags = aiProcess_Triangulate;
+constexpr unsigned kProbeSeconds = 300;
+
+void configure(Assimp::Importer& imp) { imp.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false); }
+
+// Parses `path` with assimp in a child process. Returns normally when the
+// child parsed it; throws InvalidArgument with assimp's error when it refused
+// the file, or naming the crash / timeout.
+void probe_in_child(const std::string& path) {
+  int fds[2];
+  GATCORE_CHECK(::pipe(fds) == 0, path, ": cannot create a pipe for the import check");
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw InvalidArgument(detail::cat(path, ": cannot fork the import check process"));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    ::alarm(kProbeSeconds);
+    Assimp::Importer imp;
+    configure(imp);
+    const aiScene* scene = imp.ReadFile(path, kReadFlags);
+    if (scene && scene->mRootNode) ::_exit(0);
+    const std::string err = imp.GetErrorString();
+    if (::write(fds[1], err.data(), err.size()) < 0) ::_exit(4);
+    ::_exit(3);
+  }
+  ::close(fds[1]);
+  std::string err;
+  char buf[512];
+  for (;;) {
+    const ::ssize_t n = ::read(fds[0], buf, sizeof buf);
+    if (n > 0) err.append(buf, std::size_t(n));
+    else if (n == 0 || errno != EINTR) break;
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 3)
+    throw InvalidArgument(detail::cat(path, ": not a readable character file: ", err.empty() ? "unknown error" : err));
+  if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM)
+    throw InvalidArgument(detail::cat(path, ": the assimp importer did not finish within ", kProbeSeconds,
+                                      " s; refusing the file"));
+  throw InvalidArgument(detail::cat(path, ": the assimp importer failed on this file (",
+                                    WIFSIGNALED(status) ? "signal " : "exit status ",
+                                    WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status),
+                                    "); refusing it (a malformed or unsupported file)"));
+}
+
 }  // namespace
 
 Character load_assimp_character(const std::string& path, const ImportOptions& opt) {
@@ -38,9 +105,15 @@ Character load_assimp_character(const std::string& path, const ImportOptions& op
     GATCORE_CHECK(f != nullptr, path, ": cannot open file");
     std::fclose(f);
   }
+  {
+    std::string ext = path.substr(std::min(path.size(), path.find_last_of('.')));
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    GATCORE_CHECK(ext != ".bvh", path, ": a BVH file holds a motion, not a character (read it with load_bvh)");
+  }
+  probe_in_child(path);
   Assimp::Importer imp;
-  imp.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
-  const aiScene* scene = imp.ReadFile(path, aiProcess_Triangulate);
+  configure(imp);
+  const aiScene* scene = imp.ReadFile(path, kReadFlags);
   auto fail = [&](const auto&... parts) -> void { throw InvalidArgument(detail::cat(path, ": ", parts...)); };
   if (!scene || !scene->mRootNode) {
     const std::string err = imp.GetErrorString();

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "gatcore/character/rig/pose.hpp"
+#include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
 #include "src/character/io/gltf_util.hpp"
 
@@ -225,22 +226,7 @@ void write_point_cache(const std::string& path, const PointCache& pc) {
       put<float>(out, v);
     }
   }
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
-    GATCORE_CHECK(os.good(), path, ": cannot open '", tmp, "' for writing: ", std::strerror(errno));
-    os.write(out.data(), static_cast<std::streamsize>(out.size()));
-    os.flush();
-    if (!os) {
-      std::remove(tmp.c_str());
-      throw InvalidArgument(detail::cat(path, ": write to '", tmp, "' failed (disk full?)"));
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw InvalidArgument(detail::cat(path, ": cannot rename '", tmp, "' to it: ", why));
-  }
+  write_file_atomic(path, out);
 }
 
 PointCache read_point_cache(const std::string& path) {
@@ -256,14 +242,23 @@ PointCache read_point_cache(const std::string& path) {
   pc.start_frame = get<float>(b, 20);
   pc.sample_rate = get<float>(b, 24);
   const std::int32_t n = get<std::int32_t>(b, 28);
-  GATCORE_CHECK(pc.num_points >= 0 && n >= 0, path, ": negative point or sample count");
-  const std::uint64_t want = kHeader + 12ull * static_cast<std::uint64_t>(pc.num_points) * static_cast<std::uint64_t>(n);
-  GATCORE_CHECK(b.size() == want, path, ": ", b.size(), " bytes, expected ", want, " for ", pc.num_points,
-                " points x ", n, " samples");
+  // Counts are file-provided: compared with the payload by division, so no
+  // product can wrap around, and nothing is allocated before they match.
+  GATCORE_CHECK(pc.num_points > 0 && n > 0, path, ": ", pc.num_points, " points x ", n,
+                " samples (a point cache needs at least one of each)");
+  GATCORE_CHECK(std::isfinite(pc.start_frame) && std::isfinite(pc.sample_rate) && pc.sample_rate > 0.0f, path,
+                ": bad start frame ", pc.start_frame, " or sample rate ", pc.sample_rate);
+  const std::uint64_t payload = b.size() - kHeader, per_sample = 12ull * std::uint64_t(pc.num_points);
+  GATCORE_CHECK(payload % per_sample == 0 && payload / per_sample == std::uint64_t(n), path, ": ", b.size(),
+                " bytes, but ", pc.num_points, " points x ", n, " samples need ", kHeader, " + 12 x ", pc.num_points,
+                " x ", n, " (truncated or corrupted)");
   pc.samples.resize(static_cast<std::size_t>(n));
   for (std::int32_t s = 0; s < n; ++s) {
-    pc.samples[s].resize(3 * static_cast<std::size_t>(pc.num_points));
-    std::memcpy(pc.samples[s].data(), b.data() + kHeader + 12ull * pc.num_points * s, 12ull * pc.num_points);
+    auto& v = pc.samples[std::size_t(s)];
+    v.resize(3 * static_cast<std::size_t>(pc.num_points));
+    std::memcpy(v.data(), b.data() + kHeader + per_sample * std::uint64_t(s), per_sample);
+    for (std::size_t k = 0; k < v.size(); ++k)
+      GATCORE_CHECK(std::isfinite(v[k]), path, ": sample ", s, " point ", k / 3, " holds a non-finite value");
   }
   return pc;
 }

@@ -205,6 +205,8 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
     GATCORE_CHECK(f != nullptr, path, ": cannot open file");
     std::fclose(f);
   }
+  gltf_util::ResourceGuard guard;
+  gltf_util::confine_resources(loader, guard, path, opt.resource_root);
   const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
                          : loader.LoadASCIIFromFile(&model, &err, &warn, path);
   if (!ok) {
@@ -312,6 +314,15 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
         sk.inverse_bind[j] = mat4_identity();
       } else {
         std::copy(ibm.begin() + 16 * k, ibm.begin() + 16 * (k + 1), sk.inverse_bind[j].begin());
+        // A singular inverse bind matrix (all zeros, a zero scale) has no
+        // bind pose to return to: every skinned vertex would collapse.
+        const Mat4& m = sk.inverse_bind[j];
+        const double det = double(m[0]) * (double(m[5]) * m[10] - double(m[9]) * m[6]) -
+                           double(m[4]) * (double(m[1]) * m[10] - double(m[9]) * m[2]) +
+                           double(m[8]) * (double(m[1]) * m[6] - double(m[5]) * m[2]);
+        if (!(std::abs(det) > 1e-12))
+          rd.fail("skin ", s, " inverse bind matrix ", k, " (joint '", sk.names[j],
+                  "') is not invertible (determinant ", det, ")");
       }
     }
   }

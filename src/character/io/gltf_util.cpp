@@ -4,8 +4,11 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
+#include <sstream>
 
+#include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character::gltf_util {
@@ -23,6 +26,8 @@ tinygltf::Model read_model(const std::string& path) {
         return true;
       },
       nullptr);
+  ResourceGuard guard;
+  confine_resources(gltf, guard, path);
   std::string err, warn;
   const bool ok = is_glb(path) ? gltf.LoadBinaryFromFile(&model, &err, &warn, path)
                                : gltf.LoadASCIIFromFile(&model, &err, &warn, path);
@@ -110,18 +115,53 @@ std::vector<Mat4> node_globals(const tinygltf::Model& m, const std::string& file
 }
 
 void write_model_atomic(tinygltf::Model& m, const std::string& path) {
-  const std::string tmp = path + ".tmp";
+  std::ostringstream os;
   tinygltf::TinyGLTF gltf;
-  const bool ok = gltf.WriteGltfSceneToFile(&m, tmp, true, true, !is_glb(path), is_glb(path));
-  if (!ok) {
-    std::remove(tmp.c_str());
-    throw InvalidArgument(detail::cat(path, ": cannot write the file (through '", tmp, "')"));
+  const bool ok = gltf.WriteGltfSceneToStream(&m, os, !is_glb(path), is_glb(path));
+  GATCORE_CHECK(ok && os.good(), path, ": cannot serialise the glTF model (nothing written)");
+  write_file_atomic(path, os.str());
+}
+
+namespace {
+
+bool guarded_read(std::vector<unsigned char>* out, std::string* err, const std::string& file, void* user) {
+  const auto* g = static_cast<const ResourceGuard*>(user);
+  std::error_code ec;
+  const std::filesystem::path abs = std::filesystem::weakly_canonical(file, ec);
+  const std::filesystem::path rel = abs.lexically_relative(g->root);
+  const bool inside = !ec && !rel.empty() && *rel.begin() != ".." && rel.is_relative();
+  if (!inside && abs.string() != g->model) {
+    if (err)
+      *err += "refusing to read '" + file + "': outside the model's folder '" + g->root +
+              "' (GltfImportOptions::resource_root widens it)";
+    return false;
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw InvalidArgument(detail::cat(path, ": cannot rename '", tmp, "' to it: ", why));
-  }
+  return tinygltf::ReadWholeFile(out, err, file, nullptr);
+}
+
+bool plain_exists(const std::string& file, void*) { return tinygltf::FileExists(file, nullptr); }
+std::string plain_expand(const std::string& file, void*) { return file; }  // no shell-style expansion
+bool no_write(std::string* err, const std::string& file, const std::vector<unsigned char>&, void*) {
+  if (err) *err += "refusing to write '" + file + "' while loading";
+  return false;
+}
+
+}  // namespace
+
+void confine_resources(tinygltf::TinyGLTF& loader, ResourceGuard& guard, const std::string& model_path,
+                       const std::string& root) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  guard.model = fs::weakly_canonical(model_path, ec).string();
+  const fs::path r = root.empty() ? fs::path(guard.model).parent_path() : fs::weakly_canonical(root, ec);
+  guard.root = r.string();
+  tinygltf::FsCallbacks cb{};
+  cb.FileExists = &plain_exists;
+  cb.ExpandFilePath = &plain_expand;
+  cb.ReadWholeFile = &guarded_read;
+  cb.WriteWholeFile = &no_write;
+  cb.user_data = &guard;
+  loader.SetFsCallbacks(cb);
 }
 
 }  // namespace gatcore::character::gltf_util

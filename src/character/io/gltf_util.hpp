@@ -32,8 +32,21 @@ int append_vec3(tinygltf::Model& m, const std::vector<float>& xyz);
 Mat4 node_matrix(const tinygltf::Node& n);
 // Global rest matrices of every node (throws on cycles / bad children).
 std::vector<Mat4> node_globals(const tinygltf::Model& m, const std::string& file);
-// Writes `m` to "<path>.tmp" (binary for .glb, JSON with embedded buffers
-// otherwise) and renames it over `path`: a failed write leaves no partial file.
+// Serialises `m` in memory (binary for .glb, JSON with embedded buffers
+// otherwise), checks that tinygltf wrote it whole, then writes it with
+// write_file_atomic: a failed write (full disk, ...) leaves no partial file
+// and is an error (tinygltf's own file writer ignores stream errors).
 void write_model_atomic(tinygltf::Model& m, const std::string& path);
+
+// Makes `loader` read external buffer / image URIs only inside `root`
+// (empty: the folder of `model_path`); the model file itself is always
+// allowed. A URI resolving elsewhere ("../../etc/hostname", an absolute
+// path, a symlink out) is refused by name. `guard` holds the state the
+// callbacks use and must outlive the load.
+struct ResourceGuard {
+  std::string model, root;  // canonical
+};
+void confine_resources(tinygltf::TinyGLTF& loader, ResourceGuard& guard, const std::string& model_path,
+                       const std::string& root = {});
 
 }  // namespace gatcore::character::gltf_util

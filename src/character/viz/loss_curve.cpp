@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "gatcore/character/viz/plot.hpp"
+#include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -49,28 +50,17 @@ std::string history_csv_path(const std::string& png) {
 }
 
 void write_loss_outputs(const std::vector<LossRecord>& h, const std::string& png) {
-  const std::string csv = history_csv_path(png), tmp = csv + ".tmp";
+  const std::string csv = history_csv_path(png);
   {
-    std::ofstream f(tmp, std::ios::trunc);
-    GATCORE_CHECK(f.good(), csv, ": cannot write the loss history (through '", tmp, "')");
-    f << "epoch,train_loss,val_loss,lr,seconds\n";
+    std::string f = "epoch,train_loss,val_loss,lr,seconds\n";
     char b[160], v[40] = "";
     for (const LossRecord& r : h) {
       if (r.val >= 0) std::snprintf(v, sizeof v, "%.9g", r.val);
       else v[0] = 0;  // no validation set: an empty field
       std::snprintf(b, sizeof b, "%d,%.9g,%s,%.6g,%.4g\n", r.epoch, r.train, v, r.lr, r.seconds);
-      f << b;
+      f += b;
     }
-    f.flush();
-    if (!f.good()) {
-      std::remove(tmp.c_str());
-      throw InvalidArgument(csv + ": cannot write the loss history (disk full?)");
-    }
-  }
-  if (std::rename(tmp.c_str(), csv.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw InvalidArgument(csv + ": cannot rename '" + tmp + "' to it: " + why);
+    write_file_atomic(csv, f);
   }
   PlotSeries train{"train", {}, {}}, val{"validation", {}, {}};
   for (const LossRecord& r : h) {

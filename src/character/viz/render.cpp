@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 
+#include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -253,23 +254,9 @@ void write_png(const std::string& path, const Image& img) {
   chunk(png, "IHDR", ihdr);
   chunk(png, "IDAT", z);
   chunk(png, "IEND", {});
-  // Through a temp file renamed over `path`: a picture that is rewritten
-  // while training (the loss curve) is never seen half written.
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    GATCORE_CHECK(f.good(), path, ": cannot write the file (through '", tmp, "')");
-    f.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-    f.flush();
-    if (!f.good()) {
-      std::remove(tmp.c_str());
-      throw InvalidArgument(detail::cat(path, ": cannot write the file (through '", tmp, "')"));
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw InvalidArgument(detail::cat(path, ": cannot rename '", tmp, "' to it"));
-  }
+  // Atomic: a picture that is rewritten while training (the loss curve) is
+  // never seen half written.
+  write_file_atomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
 }
 
 }  // namespace gatcore::character

@@ -104,7 +104,23 @@ struct DatasetDescription {
   Split split;                          // by character, from seed
 };
 
-// Fills the split from the fractions and the seed.
+// The ranges every dataset description must be in, whether from `gat
+// dataset build` or a dataset file (validate_dataset).
+struct DatasetLimits {
+  double max_random_poses = 1e6;  // per character per epoch
+  double max_pose_angle = 3.2;    // radians
+  double max_motion_stride = 1e6;
+  double max_subsample = 1e9;
+  double max_fraction = 0.9;      // validation, test and their sum
+  double max_dm_iterations = 10000;
+  double min_dm_step = 1e-6;
+};
+// Throws InvalidArgument naming `where`, the field and the value for any
+// field out of range (DatasetLimits), a bad distortion scale, a split index
+// out of range or listed twice (within or across train / validation / test).
+void validate_dataset(const DatasetDescription& d, const std::string& where);
+
+// Fills the split from the fractions and the seed (validated).
 DatasetDescription describe_dataset(std::vector<std::string> characters, std::vector<std::string> motions,
                                     const DatasetDescription& settings = {});
 // File entries are written relative to the dataset file's directory and

@@ -12,6 +12,10 @@ struct GltfImportOptions {
   float weld_tolerance = 1e-6f;
   float clip_fps = 30.0f;  // sampling rate of the file's animations
   bool load_clips = true;
+  // External buffer / image URIs of a .gltf must resolve inside this folder
+  // (empty: the model file's own folder); others ("../../etc/hostname", an
+  // absolute path, a symlink out of it) are refused by name.
+  std::string resource_root;
 };
 
 // Merges every skinned primitive of every mesh instance in the file (several

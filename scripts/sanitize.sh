@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# The sanitizer and fuzzing job of CI: one clang build (build-asan/) with
+# AddressSanitizer + UndefinedBehaviorSanitizer (+ LeakSanitizer, with the
+# third-party suppressions of tests/sanitizer/lsan.supp) and libFuzzer
+# coverage, serving both
+#   1. the test suite under the sanitizers (the Vulkan variant re-runs that
+#      only change lavapipe's vector width / staging / binding size are
+#      left to the Release suite: same code paths, 4x the lavapipe time
+#      under ASan; the benchmarks are not built), and
+#   2. every fuzzer for GATCORE_FUZZ_SECONDS (default 30) each, from the
+#      seed corpus plus the issue #20 reproducers.
+# Usage: bash scripts/sanitize.sh [--build-only|--fuzz-only]   (from anywhere)
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+build="${GATCORE_ASAN_BUILD:-build-asan}"
+seconds="${GATCORE_FUZZ_SECONDS:-30}"
+mode="${1:-all}"
+
+export ASAN_OPTIONS="detect_leaks=1:strict_init_order=1:detect_stack_use_after_return=0:allocator_may_return_null=0"
+export LSAN_OPTIONS="suppressions=$root/tests/sanitizer/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+
+if [[ "$mode" != "--fuzz-only" ]]; then
+  cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_CXX_COMPILER=clang++ \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
+    -DGATCORE_SANITIZE=address,undefined -DGATCORE_FUZZ=ON -DGATCORE_BUILD_BENCH=OFF
+  cmake --build "$build" -j2
+  [[ "$mode" == "--build-only" ]] && exit 0
+  # Variants of the Vulkan tests (see above) and the install test (it
+  # rebuilds a project against the package; nothing sanitizer-specific).
+  ctest --test-dir "$build" --output-on-failure -j2 \
+    -E '_(lp128|lp256|lp512|staging|smallbind.*)$|^downstream_find_package$'
+fi
+
+# Each fuzzer for a bounded time on a scratch copy of its corpus (new inputs
+# land there, not in the build's seed folder). -rss_limit_mb: a loader that
+# asks for gigabytes for a small file is a defect, reported as such.
+work="$build/fuzz_run"
+rm -rf "$work"
+"$build/tests/fuzz/make_corpus" "$build/tests/fuzz/corpus" >/dev/null
+total=0
+for f in checkpoint bvh pc2 gltf dataset; do
+  mkdir -p "$work/$f"
+  cp "$build/tests/fuzz/corpus/$f"/* "$work/$f/"
+  log="$work/$f.log"
+  if ! (cd "$work" && "../tests/fuzz/fuzz_$f" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=20 \
+          -print_final_stats=1 "$f" "$root/tests/fuzz/repro" >"$log" 2>&1); then
+    tail -n 60 "$log"
+    echo "sanitize: fuzz_$f found a defect (reproducer: $work/crash-* / leak-* / timeout-* / oom-*)" >&2
+    exit 1
+  fi
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+  total=$((total + runs))
+  echo "sanitize: fuzz_$f: $runs executions in ${seconds} s, no defect"
+done
+echo "sanitize: fuzzing: $total executions in all, no defect"

@@ -1,0 +1,62 @@
+// Writes the fuzzers' seed corpora with the project's own exporters:
+//   make_corpus DIR  ->  DIR/{checkpoint,bvh,pc2,gltf,dataset}/...
+// Small inputs on purpose (libFuzzer mutates faster on short files).
+#include <filesystem>
+#include <fstream>
+
+#include "character_fixtures.hpp"
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/io/bake.hpp"
+#include "gatcore/character/io/gltf.hpp"
+#include "gatcore/models/checkpoint.hpp"
+
+using namespace gatcore;
+namespace fs = std::filesystem;
+
+int main(int argc, char** argv) {
+  if (argc != 2) return 2;
+  const fs::path out = argv[1];
+  for (const char* d : {"checkpoint", "bvh", "pc2", "gltf", "dataset"}) fs::create_directories(out / d);
+
+  // Checkpoints: a small real model with training state, and a two-tensor file.
+  models::ModelConfig cfg = models::ModelConfig::defaults("fc", 4, 3);
+  cfg.fc = {8};
+  auto m = models::make_model(cfg, 1);
+  models::save_checkpoint((out / "checkpoint" / "fc.gcm").string(), *m, models::Normaliser{});
+  models::CheckpointFile f;
+  f.metadata["config"] = "name = fc";
+  f.tensors.emplace_back("a", Tensor::full(2, 3, 0.5f));
+  f.tensors.emplace_back("b", Tensor::full(1, 1, -1.0f));
+  models::write_checkpoint_file((out / "checkpoint" / "two.gcm").string(), f);
+
+  // BVH: the procedural swing (3 frames) and a minimal one.
+  std::ofstream(out / "bvh" / "swing.bvh") << character::procedural_swing_bvh(3);
+  std::ofstream(out / "bvh" / "min.bvh") << "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation "
+                                            "Yrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\nMOTION\nFrames: 2\n"
+                                            "Frame Time: 0.5\n1 2 3\n4 5 6\n";
+
+  // Point cache.
+  character::PointCache pc;
+  pc.num_points = 3;
+  pc.samples = {{0, 1, 2, 3, 4, 5, 6, 7, 8}, {1, 1, 1, 2, 2, 2, 3, 3, 3}};
+  character::write_point_cache((out / "pc2" / "small.pc2").string(), pc);
+
+  // glTF: the test tube character re-exported by save_gltf_character (binary and JSON).
+  const std::string tube = charfix::write_temp("fuzz_tube.glb", charfix::skinned_glb());
+  const character::Character ch = character::load_gltf(tube);
+  character::save_gltf_character(ch, (out / "gltf" / "tube.glb").string());
+  character::save_gltf_character(ch, (out / "gltf" / "tube.gltf").string());
+
+  // Dataset descriptions (with and without a joint-limit table).
+  character::DatasetDescription s;
+  s.random_poses = 4;
+  s.distortion_scales = {1, 4};
+  const auto d = character::describe_dataset({"procedural:humanoid:0", "procedural:creature:1", "procedural:humanoid:2"},
+                                             {}, s);
+  character::save_dataset((out / "dataset" / "plain.json").string(), d);
+  auto e = d;
+  e.joint_limits = character::load_joint_limits("humanoid");
+  character::save_dataset((out / "dataset" / "limits.json").string(), e);
+  return 0;
+}

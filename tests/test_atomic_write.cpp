@@ -1,0 +1,96 @@
+// Every writer goes through write_file_atomic: on a full disk (simulated with
+// RLIMIT_FSIZE, which makes write() fail with EFBIG past the limit) the
+// writer throws naming the file, the old contents stay, and no temp file is
+// left; a stale temp file from a killed earlier write is cleaned.
+#include <catch2/catch.hpp>
+
+#include <sys/resource.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "gatcore/atomic_file.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/io/bake.hpp"
+#include "gatcore/character/io/gltf.hpp"
+#include "gatcore/models/checkpoint.hpp"
+
+using namespace gatcore;
+using Catch::Matchers::Contains;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream is(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>()};
+}
+
+// Files may grow to `bytes` while alive (SIGXFSZ ignored: write() fails instead).
+struct DiskFull {
+  rlimit old{};
+  void (*old_handler)(int);
+  explicit DiskFull(rlim_t bytes) {
+    getrlimit(RLIMIT_FSIZE, &old);
+    old_handler = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit lim = old;
+    lim.rlim_cur = bytes;
+    REQUIRE(setrlimit(RLIMIT_FSIZE, &lim) == 0);
+  }
+  ~DiskFull() {
+    setrlimit(RLIMIT_FSIZE, &old);
+    std::signal(SIGXFSZ, old_handler);
+  }
+};
+
+template <class Write>
+void check_full_disk(const fs::path& path, Write write) {
+  INFO(path.string());
+  std::ofstream(path, std::ios::binary) << "old contents";
+  {
+    DiskFull full(64);
+    CHECK_THROWS_WITH(write(), Contains(path.string()));
+  }
+  CHECK(slurp(path) == "old contents");
+  CHECK_FALSE(fs::exists(path.string() + ".tmp"));
+  // Room again: the write succeeds, a stale temp file is cleaned.
+  std::ofstream(path.string() + ".tmp", std::ios::binary) << "stale";
+  CHECK_NOTHROW(write());
+  CHECK(slurp(path) != "old contents");
+  CHECK_FALSE(fs::exists(path.string() + ".tmp"));
+}
+
+}  // namespace
+
+TEST_CASE("write_file_atomic: all or nothing", "[io][atomic]") {
+  const fs::path dir = fs::temp_directory_path() / "gatcore_atomic_test";
+  fs::create_directories(dir);
+  const std::string big(4096, 'x');
+  check_full_disk(dir / "plain.bin", [&] { write_file_atomic((dir / "plain.bin").string(), big); });
+  CHECK(slurp(dir / "plain.bin") == big);
+  CHECK_THROWS_WITH(write_file_atomic((dir / "no_such_dir" / "x.bin").string(), "abc"),
+                    Contains("no_such_dir/x.bin") && Contains("No such file or directory"));
+}
+
+TEST_CASE("glTF, point cache and checkpoint writers fail cleanly on a full disk", "[io][atomic]") {
+  const fs::path dir = fs::temp_directory_path() / "gatcore_atomic_test";
+  fs::create_directories(dir);
+  const character::Character ch = character::procedural_character();
+  for (const char* name : {"ch.glb", "ch.gltf"})
+    check_full_disk(dir / name, [&] { character::save_gltf_character(ch, (dir / name).string()); });
+  CHECK_NOTHROW(character::load_gltf((dir / "ch.glb").string()));
+
+  character::PointCache pc;
+  pc.num_points = 100;
+  pc.samples.assign(3, std::vector<float>(300, 1.0f));
+  check_full_disk(dir / "c.pc2", [&] { character::write_point_cache((dir / "c.pc2").string(), pc); });
+  CHECK(character::read_point_cache((dir / "c.pc2").string()).samples.size() == 3);
+
+  models::CheckpointFile f;
+  f.metadata["config"] = "x";
+  f.tensors.emplace_back("w", Tensor::full(16, 16, 0.5f));
+  check_full_disk(dir / "m.gcm", [&] { models::write_checkpoint_file((dir / "m.gcm").string(), f); });
+  CHECK(models::read_checkpoint_file((dir / "m.gcm").string()).tensors.size() == 1);
+}
