@@ -39,12 +39,20 @@ namespace {
 constexpr std::int64_t kKc = GATCORE_GEMM_KC;  // k block: a 32-wide B panel (24 KiB) stays in L1
 constexpr std::int64_t kMc = 120;  // row block: its A rows (90 KiB) stay in L2 across the B panels
 constexpr std::int64_t kNc = 512;  // column block: the packed B block (384 KiB) stays in L2
+// A row block is packed (contiguous MR-row panels) when at least this many
+// columns reuse it: reading A in place costs 12 strided cache lines per k
+// (and, for power-of-two row strides, 12 lines in one L1 set); packing costs
+// one pass over the block, worth it when the block feeds >= 4 B panels.
+#ifndef GATCORE_GEMM_PACK_A_MIN_N
+#define GATCORE_GEMM_PACK_A_MIN_N 128
+#endif
+constexpr std::int64_t kPackAMinN = GATCORE_GEMM_PACK_A_MIN_N;
 
 struct Buffers {
   float* a = nullptr;
   float* b = nullptr;
   Buffers() {
-    a = static_cast<float*>(std::aligned_alloc(64, sizeof(float) * 24 * kKc));  // one partial tile
+    a = static_cast<float*>(std::aligned_alloc(64, sizeof(float) * kMc * kKc));  // one packed row block
     b = static_cast<float*>(std::aligned_alloc(64, sizeof(float) * kKc * kNc));
   }
   ~Buffers() {
@@ -156,10 +164,13 @@ void micro_kernel(std::int64_t kc, const float* __restrict a, std::int64_t strid
 template <int MR, int NV>
 void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf) {
   constexpr int NR = 16 * NV;
-  // A is read in place (its rows or, transposed, its columns are already
-  // contiguous enough); only the bottom partial tile of MR rows is packed
-  // (zero-padded), so the kernel never reads past A. Packing all of A cost as
-  // much as the product itself when n is only 64 wide.
+  static_assert(kMc % MR == 0, "row blocks are whole register tiles");
+  // Narrow products (n < kPackAMinN) read A in place (its rows or,
+  // transposed, its columns are contiguous enough) and pack only the bottom
+  // partial tile of MR rows (zero-padded), so the kernel never reads past A:
+  // with n = 64 a block feeds only two B panels and packing it cost as much
+  // as the product. Wider products pack each row block once per k block.
+  const bool pack_a_blocks = g.n >= kPackAMinN;
   for (std::int64_t j0 = 0; j0 < g.n; j0 += kNc) {
     const std::int64_t nc = std::min(kNc, g.n - j0);
     for (std::int64_t k0 = 0; k0 < k; k0 += kKc) {
@@ -167,18 +178,22 @@ void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf) {
       // The first k block applies the caller's beta; later ones accumulate.
       const float beta = k0 == 0 ? g.beta : 1.0f;
       pack_b(g, k0, kc, j0, nc, NR, buf.b);
-      const std::int64_t m_full = g.m / MR * MR;
+      const std::int64_t m_full = pack_a_blocks ? g.m : g.m / MR * MR;
       if (m_full < g.m) pack_a(g, m_full, g.m - m_full, k0, kc, MR, buf.a);
       for (std::int64_t i0 = 0; i0 < g.m; i0 += kMc) {
         const std::int64_t mc = std::min(kMc, g.m - i0);
+        if (pack_a_blocks) pack_a(g, i0, mc, k0, kc, MR, buf.a);
         for (std::int64_t jr = 0; jr < nc; jr += NR) {
           const int nr_eff = int(std::min<std::int64_t>(NR, nc - jr));
           const float* bp = buf.b + jr * kc;
           for (std::int64_t ir = 0; ir < mc; ir += MR) {
             const std::int64_t i = i0 + ir;
             float* c = g.c + i * g.ldc + j0 + jr;
-            if (i >= m_full)
-              micro_kernel<MR, NV, false>(kc, buf.a, MR, bp, c, g.ldc, int(g.m - i), nr_eff, g.alpha, beta);
+            const int mr_eff = int(std::min<std::int64_t>(MR, g.m - i));
+            if (pack_a_blocks)
+              micro_kernel<MR, NV, false>(kc, buf.a + ir * kc, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
+            else if (i >= m_full)
+              micro_kernel<MR, NV, false>(kc, buf.a, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
             else if (g.trans_a)
               micro_kernel<MR, NV, false>(kc, g.a + k0 * g.lda + i, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha, beta);
             else
