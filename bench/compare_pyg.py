@@ -499,6 +499,7 @@ def main():
         rows.append({"workload": label, "pytorch_ms": py, "best_variant": best,
                      "best_pytorch_ms": ok[best] if best else nan, "gatcore_ms": gc,
                      "speedup": (ok[best] / gc) if best else nan, "load1": load1()})
+        print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
     mem = []
     for name, bname in ([] if args.skip_memory else peaks):
         b = bench.get(bname, {})
@@ -509,6 +510,7 @@ def main():
                     "pytorch_step_MiB": {v: (r["peak_kib"] - r["base_kib"]) / 1024 for v, r in ok.items()},
                     "best_variant": best, "best_pytorch_peak_MiB": ok[best]["peak_kib"] / 1024 if best else nan,
                     "gatcore_peak_MiB": b.get("peak_MiB", nan), "gatcore_step_MiB": b.get("step_MiB", nan)})
+        print(f"[progress] {json.dumps(mem[-1])}", file=sys.stderr, flush=True)
     gemms = []
     if not args.skip_gemm and not only:
         for m, k, n, op, label in GEMMS:
@@ -529,6 +531,7 @@ def main():
                           "fraction": gc / r["gflops"] if r else nan,
                           "torch_gflops_per_cpu_s": r1["gflops"] if r1 else nan, "gatcore_gflops_per_cpu_s": gc1,
                           "fraction_per_cpu_s": gc1 / r1["gflops"] if r1 else nan, "load1": load1()})
+            print(f"[progress] {json.dumps(gemms[-1])}", file=sys.stderr, flush=True)
 
     load = open("/proc/loadavg").read().split()[:3]
     print(f"threads {args.threads} both sides; torch {versions.get('torch', '?')}, "

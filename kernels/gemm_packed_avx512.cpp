@@ -28,6 +28,10 @@
 #if defined(__x86_64__) && defined(__GNUC__)
 #pragma GCC push_options
 #pragma GCC target("avx512f,avx2,fma")
+// GCC 12 warns inside its own _mm512_undefined_ps() (used by the shuffle
+// intrinsics of transpose16) that the deliberately undefined value "may be
+// used uninitialized" (GCC bug 105593); nothing here reads uninitialised data.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <immintrin.h>
 
 namespace gatcore::cpu::detail {
@@ -42,8 +46,8 @@ constexpr std::int64_t kNc = 512;  // column block: the packed B block (384 KiB)
 // A row block of a row-major op(A) is packed (contiguous MR-row panels) when
 // at least this many columns reuse it: reading A in place costs 12 strided
 // cache lines per k (and, for power-of-two row strides, 12 lines in one L1
-// set: 4096^3 went from 75 to 90 GFLOP/s per core); packing costs one pass
-// over the block, worth it when the block feeds >= 4 B panels.
+// set); packing costs one pass over the block, worth it when the block feeds
+// >= 4 B panels.
 #ifndef GATCORE_GEMM_PACK_A_MIN_N
 #define GATCORE_GEMM_PACK_A_MIN_N 128
 #endif
