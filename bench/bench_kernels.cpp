@@ -305,7 +305,7 @@ BENCHMARK(neighbour_mean_bwd)->Apply(mesh_sizes);
 
 // ---- GEMM on the model's layer shapes ----------------------------------------------------------------
 // Args: M (rows = nodes), K (input width), N (output width), which product:
-// (2048^3 is the large square product that states the machine's GEMM rate)
+// (2048^3 and 4096^3 are the large square products that state the machine's GEMM rate)
 //   0 fwd: C[M,N]  = A[M,K] B[K,N]
 //   1 dA:  dA[M,K] += dC[M,N] B^T    (input gradient)
 //   2 dB:  dB[K,N] += A^T dC[M,N]     (weight gradient)
@@ -345,7 +345,9 @@ BENCHMARK(gemm)
     ->ArgsProduct({{8000}, {504}, {512}, {0, 1, 2}})
     ->ArgsProduct({{8000}, {392}, {64}, {0, 1, 2}})
     ->ArgsProduct({{8000}, {504}, {8}, {0, 1, 2}})  // the self-reinforced stream of a GAT block
-    ->Args({2048, 2048, 2048, 0})                   // large square: the machine's sgemm rate
+    ->ArgsProduct({{24576}, {1088}, {1024}, {0, 1, 2}})  // NeuroSkinning's classifier input layer (12 x 2048)
+    ->Args({2048, 2048, 2048, 0})                   // large squares: the machine's sgemm rate
+    ->Args({4096, 4096, 4096, 0})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 

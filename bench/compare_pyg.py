@@ -16,7 +16,12 @@ one invocation, with the same thread count on both sides:
 Layer sizes are gatcore's (include/gatcore/models, shared/SPEC.md); the
 meshes are gatbench's (bench/bench_util.hpp: 25x40-vertex triangulated grid
 patches, self-loops), rebuilt here identically. Timings: warm-up, then the
-median of repeats. bench/compare.sh installs the reference stack and runs this.
+median of repeats. Each PyTorch workload runs in two variants, eager and
+torch.compile (inductor; warm-up includes the compilation), each in its own
+fresh process right after gatcore's run of the same workload; the faster of
+the two is the reference. The GEMM section times torch.mm (the BLAS torch was
+built with: MKL in the PyPI wheel) against gatbench's gemm on the same shapes,
+back to back per shape. bench/compare.sh makes the environment and runs this.
 """
 import argparse
 import json
@@ -252,18 +257,22 @@ def pool_matrix(torch, characters, vertices, src, dst, k):
     return torch.sparse_coo_tensor(torch.tensor([r, c]), torch.tensor(v), (n, n)).coalesce()
 
 
-def make_workload(name, torch, pyg):
-    """Returns (step function, description) for a workload name."""
+def make_workload(name, torch, pyg, compiled=False):
+    """Returns the step function of a workload; compiled: the model under torch.compile."""
     F = torch.nn.functional
     DenseGats, OriGat, NeuroSkinning = build_models(torch, pyg)
     gen = torch.Generator().manual_seed(1)
 
+    def maybe_compile(m):
+        return torch.compile(m) if compiled else m
+
     def train_step(model, x, ei, target, loss_fn, extra=()):
         opt = torch.optim.Adam(model.parameters(), lr=1e-3)
+        run = maybe_compile(model)
 
         def step():
             opt.zero_grad(set_to_none=True)
-            loss = loss_fn(model(x, ei, *extra), target)
+            loss = loss_fn(run(x, ei, *extra), target)
             loss.backward()
             opt.step()
         return step
@@ -273,25 +282,27 @@ def make_workload(name, torch, pyg):
         x = torch.rand(10000, 64, generator=gen) * 2 - 1
         target = torch.rand(10000, 64, generator=gen)
         conv = pyg.nn.GATConv(64, 8, heads=8, bias=False, add_self_loops=False)
+        run = maybe_compile(conv)
         if name == "gat_layer_fwd":
             def fwd():
                 with torch.no_grad():
-                    conv(x, ei)
+                    run(x, ei)
             return fwd
 
         def fwdbwd():
             conv.zero_grad(set_to_none=True)
-            F.mse_loss(conv(x, ei), target).backward()
+            F.mse_loss(run(x, ei), target).backward()
         return fwdbwd
     if name == "densegats_infer":
         ei, _, _ = batch_graph(torch, 1, 10000)
         x = torch.rand(10000, FEATURES, generator=gen) * 2 - 1
         model = DenseGats().eval()
         model.fold()
+        run = maybe_compile(model)
 
         def infer():
             with torch.no_grad():
-                model(x, ei)
+                run(x, ei)
         return infer
     if name in ("densegats_train", "origat_train"):
         ei, _, _ = batch_graph(torch, 8, 1000)
@@ -327,12 +338,57 @@ PEAK = [("densegats_train", "model_peak_rss/densegats"), ("origat_train", "model
         ("neuroskinning_train", "model_peak_rss/neuroskinning")]
 
 
+GEMMS = [  # (M, K, N, gatbench op, label): the model's shapes and the large squares
+    (8000, 504, 512, 0, "8000x504x512 C=AB"), (8000, 504, 512, 1, "8000x504x512 dA=dC B^T"),
+    (8000, 504, 512, 2, "8000x504x512 dB=A^T dC"), (24576, 1088, 1024, 0, "24576x1088x1024 C=AB"),
+    (24576, 1088, 1024, 1, "24576x1088x1024 dA=dC B^T"), (24576, 1088, 1024, 2, "24576x1088x1024 dB=A^T dC"),
+    (2048, 2048, 2048, 0, "2048^3"), (4096, 4096, 4096, 0, "4096^3"),
+]
+
+
+def torch_gemm_gflops(torch, m, k, n, op, args, cpu_time=False):
+    """torch.mm on gatbench's product `op` (0: A B, 1: dC B^T, 2: A^T dC), accumulating like gatbench.
+    cpu_time: GFLOP per CPU-second of this process (1 thread: what a core does when it runs, which a
+    loaded machine's time-sharing does not change much) instead of per wall-clock second."""
+    a, b = torch.rand(m, k) * 2 - 1, torch.rand(k, n) * 2 - 1
+    dc = torch.rand(m, n) * 2 - 1
+    if op == 0:
+        out = torch.empty(m, n)
+        fn = lambda: torch.mm(a, b, out=out)
+    elif op == 1:
+        da = torch.zeros(m, k)
+        fn = lambda: da.addmm_(dc, b.t())
+    else:
+        db = torch.zeros(k, n)
+        fn = lambda: db.addmm_(a.t(), dc)
+    if cpu_time:
+        for _ in range(args.warmup):
+            fn()
+        best = 0.0
+        for _ in range(max(args.repeats, 1)):
+            t0 = time.process_time()
+            fn()
+            best = max(best, 2.0 * m * k * n / max(time.process_time() - t0, 1e-9) / 1e9)
+        return best
+    ms = median_ms(fn, args.warmup, args.repeats, args.min_time)
+    return 2.0 * m * k * n / (ms * 1e-3) / 1e9
+
+
 def child(name, mode, args):
     """Runs in a fresh process: time one workload, or measure its peak RSS."""
     import torch
-    import torch_geometric as pyg
     torch.set_num_threads(args.threads)
-    fn = make_workload(name, torch, pyg)
+    if mode in ("gemm", "gemm_cpu"):
+        m, k, n, op = (int(v) for v in name.split(","))
+        print(json.dumps({"gflops": torch_gemm_gflops(torch, m, k, n, op, args, mode == "gemm_cpu")}))
+        return
+    if mode == "versions":
+        import torch_geometric as pyg
+        print(json.dumps({"torch": torch.__version__, "torch_geometric": pyg.__version__,
+                          "config": torch.__config__.show(), "parallel": torch.__config__.parallel_info()}))
+        return
+    import torch_geometric as pyg
+    fn = make_workload(name, torch, pyg, compiled=args.child_variant == "compiled")
     if mode == "time":
         print(json.dumps({"ms": median_ms(fn, args.warmup, args.repeats, args.min_time)}))
     else:
@@ -346,12 +402,16 @@ def child(name, mode, args):
         print(json.dumps({"base_kib": base, "peak_kib": peak, "step_ms": statistics.median(ms)}))
 
 
-def run_child(name, mode, args):
+def run_child(name, mode, args, variant="eager"):
+    """One fresh child; a variant that fails (e.g. torch.compile on an op it cannot trace) gives NaN."""
     cmd = [sys.executable, os.path.abspath(__file__), "--child", name, "--child-mode", mode,
-           "--threads", str(args.threads), "--warmup", str(args.warmup), "--repeats", str(args.repeats),
-           "--min-time", str(args.min_time)]
-    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+           "--child-variant", variant, "--threads", str(args.threads), "--warmup", str(args.warmup),
+           "--repeats", str(args.repeats), "--min-time", str(args.min_time)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        print(f"compare_pyg: {name} ({mode}, {variant}) failed:\n{r.stderr[-2000:]}", file=sys.stderr)
+        return None
+    return json.loads(r.stdout.strip().splitlines()[-1])
 
 
 def main():
@@ -366,6 +426,9 @@ def main():
     ap.add_argument("--skip-memory", action="store_true", help="timings only (no peak-memory children)")
     ap.add_argument("--child", default="")
     ap.add_argument("--child-mode", default="time")
+    ap.add_argument("--child-variant", default="eager")
+    ap.add_argument("--variants", default="eager,compiled", help="PyTorch variants to time (eager, compiled)")
+    ap.add_argument("--skip-gemm", action="store_true", help="no GEMM section")
     args = ap.parse_args()
     if args.child:
         return child(args.child, args.child_mode, args)
@@ -380,10 +443,11 @@ def main():
     # before the PyTorch side of the same workload.
     env = dict(os.environ, OMP_NUM_THREADS=str(args.threads))
 
-    def gatbench(names, extra):
+    def gatbench(names, extra, threads=None):
         filt = "^(" + "|".join(names) + ")(/|$)"
+        e = env if threads is None else dict(env, OMP_NUM_THREADS=str(threads))
         out = subprocess.run([args.gatbench, "--benchmark_filter=" + filt, "--benchmark_format=json"] + extra,
-                             check=True, capture_output=True, text=True, env=env).stdout
+                             check=True, capture_output=True, text=True, env=e).stdout
         return json.loads(out)
 
     bench = {}
@@ -413,41 +477,93 @@ def main():
         t = b["real_time"]
         return {"ms": t, "us": t / 1e3, "ns": t / 1e6, "s": t * 1e3}[b["time_unit"]]
 
+    variants = [v for v in args.variants.split(",") if v]
+    nan = float("nan")
+
+    def load1():
+        return float(open("/proc/loadavg").read().split()[0])
+
+    versions = run_child("-", "versions", args) or {}
     rows = []
     for name, bname, label in work:
-        # gatcore, then PyTorch, back to back per workload: on a shared
-        # machine the load drifts, and adjacent runs see about the same load.
+        # gatcore, then each PyTorch variant, back to back per workload: on a
+        # shared machine the load drifts, and adjacent runs see about the same load.
         gatbench_time(bname)
         gc = gatcore_ms(bname)
-        py = run_child(name, "time", args)["ms"]
-        rows.append({"workload": label, "pytorch_ms": py, "gatcore_ms": gc, "speedup": py / gc,
-                     "load1": float(open("/proc/loadavg").read().split()[0])})
+        py = {}
+        for v in variants:
+            r = run_child(name, "time", args, v)
+            py[v] = r["ms"] if r else nan
+        ok = {v: t for v, t in py.items() if t == t}
+        best = min(ok, key=ok.get) if ok else None
+        rows.append({"workload": label, "pytorch_ms": py, "best_variant": best,
+                     "best_pytorch_ms": ok[best] if best else nan, "gatcore_ms": gc,
+                     "speedup": (ok[best] / gc) if best else nan, "load1": load1()})
+        print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
     mem = []
     for name, bname in ([] if args.skip_memory else peaks):
-        py = run_child(name, "rss", args)
         b = bench.get(bname, {})
-        mem.append({"workload": name, "pytorch_peak_MiB": py["peak_kib"] / 1024,
-                    "pytorch_step_MiB": (py["peak_kib"] - py["base_kib"]) / 1024,
-                    "gatcore_peak_MiB": b.get("peak_MiB", float("nan")),
-                    "gatcore_step_MiB": b.get("step_MiB", float("nan"))})
+        py = {v: run_child(name, "rss", args, v) for v in variants}
+        ok = {v: r for v, r in py.items() if r}
+        best = min(ok, key=lambda v: ok[v]["peak_kib"]) if ok else None
+        mem.append({"workload": name, "pytorch_peak_MiB": {v: r["peak_kib"] / 1024 for v, r in ok.items()},
+                    "pytorch_step_MiB": {v: (r["peak_kib"] - r["base_kib"]) / 1024 for v, r in ok.items()},
+                    "best_variant": best, "best_pytorch_peak_MiB": ok[best]["peak_kib"] / 1024 if best else nan,
+                    "gatcore_peak_MiB": b.get("peak_MiB", nan), "gatcore_step_MiB": b.get("step_MiB", nan)})
+        print(f"[progress] {json.dumps(mem[-1])}", file=sys.stderr, flush=True)
+    gemms = []
+    if not args.skip_gemm and not only:
+        for m, k, n, op, label in GEMMS:
+            j = gatbench([f"gemm/M:{m}/K:{k}/N:{n}/op:{op}"],
+                         [f"--benchmark_min_time={args.min_time / args.repeats}",
+                          f"--benchmark_repetitions={args.repeats}", "--benchmark_report_aggregates_only=true"])
+            med = [b for b in j["benchmarks"] if b.get("aggregate_name") == "median"] or j["benchmarks"]
+            gc = med[0].get("flops", nan) / 1e9
+            r = run_child(f"{m},{k},{n},{op}", "gemm", args)
+            # One thread, GFLOP per CPU-second, best repetition, both sides.
+            one = argparse.Namespace(**dict(vars(args), threads=1))
+            j1 = gatbench([f"gemm/M:{m}/K:{k}/N:{n}/op:{op}"],
+                          [f"--benchmark_repetitions={max(args.repeats, 1)}", "--benchmark_min_time=0"], threads=1)
+            gc1 = max(b.get("flops", 0) * b["real_time"] / b["cpu_time"] for b in j1["benchmarks"]
+                      if b.get("run_type") == "iteration") / 1e9
+            r1 = run_child(f"{m},{k},{n},{op}", "gemm_cpu", one)
+            gemms.append({"shape": label, "torch_gflops": r["gflops"] if r else nan, "gatcore_gflops": gc,
+                          "fraction": gc / r["gflops"] if r else nan,
+                          "torch_gflops_per_cpu_s": r1["gflops"] if r1 else nan, "gatcore_gflops_per_cpu_s": gc1,
+                          "fraction_per_cpu_s": gc1 / r1["gflops"] if r1 else nan, "load1": load1()})
+            print(f"[progress] {json.dumps(gemms[-1])}", file=sys.stderr, flush=True)
 
     load = open("/proc/loadavg").read().split()[:3]
-    print(f"threads {args.threads} both sides; load average at the end: {' '.join(load)}; "
-          f"OPENBLAS_CORETYPE={os.environ.get('OPENBLAS_CORETYPE', '(unset)')}")
-    print(f"{'workload':42s} {'PyTorch ms':>11s} {'gatcore ms':>11s} {'ratio':>7s}  load (1 min, after the pair)")
+    print(f"threads {args.threads} both sides; torch {versions.get('torch', '?')}, "
+          f"torch_geometric {versions.get('torch_geometric', '?')}; load average at the end: {' '.join(load)}")
+    head = "".join(f" {('torch ' + v + ' ms'):>19s}" for v in variants)
+    print(f"{'workload':40s}{head} {'gatcore ms':>11s} {'best/gatcore':>12s}  load (1 min, after the set)")
     for r in rows:
-        print(f"{r['workload']:42s} {r['pytorch_ms']:11.2f} {r['gatcore_ms']:11.2f} {r['speedup']:6.1f}x  {r['load1']:.1f}")
-    print()
-    print(f"{'peak memory (MiB)':42s} {'PyTorch':>11s} {'gatcore':>11s} {'ratio':>7s}   (added by the steps: PyTorch / gatcore)")
-    for m in mem:
-        print(f"{m['workload']:42s} {m['pytorch_peak_MiB']:11.1f} {m['gatcore_peak_MiB']:11.1f} "
-              f"{m['pytorch_peak_MiB'] / m['gatcore_peak_MiB']:6.1f}x   "
-              f"{m['pytorch_step_MiB']:.1f} / {m['gatcore_step_MiB']:.1f}")
+        cols = "".join(f" {r['pytorch_ms'][v]:19.2f}" for v in variants)
+        print(f"{r['workload']:40s}{cols} {r['gatcore_ms']:11.2f} {r['speedup']:11.1f}x  {r['load1']:.1f}")
+    if mem:
+        print()
+        head = "".join(f" {('torch ' + v):>16s}" for v in variants)
+        print(f"{'peak memory of a training step (MiB)':40s}{head} {'gatcore':>11s} {'best/gatcore':>12s}"
+              "   (added by the steps: torch per variant / gatcore)")
+        for m in mem:
+            cols = "".join(f" {m['pytorch_peak_MiB'].get(v, nan):16.1f}" for v in variants)
+            steps = " / ".join(f"{m['pytorch_step_MiB'].get(v, nan):.1f}" for v in variants)
+            print(f"{m['workload']:40s}{cols} {m['gatcore_peak_MiB']:11.1f} "
+                  f"{m['best_pytorch_peak_MiB'] / m['gatcore_peak_MiB']:11.1f}x   {steps} / {m['gatcore_step_MiB']:.1f}")
+    if gemms:
+        print()
+        print(f"{'GEMM, GFLOP/s':28s} {'2 threads, wall clock (median)':>36s} {'1 thread, per CPU-second (best)':>36s}")
+        print(f"{'':28s} {'torch.mm':>11s} {'gatcore':>11s} {'fraction':>12s} {'torch.mm':>11s} {'gatcore':>11s}"
+              f" {'fraction':>12s}  load")
+        for g in gemms:
+            print(f"{g['shape']:28s} {g['torch_gflops']:11.1f} {g['gatcore_gflops']:11.1f} "
+                  f"{100 * g['fraction']:11.1f}% {g['torch_gflops_per_cpu_s']:11.1f} "
+                  f"{g['gatcore_gflops_per_cpu_s']:11.1f} {100 * g['fraction_per_cpu_s']:11.1f}%  {g['load1']:.1f}")
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"load": load, "threads": args.threads, "time": rows, "memory": mem,
-                       "gatbench_context": context}, f, indent=1)
-
+            json.dump({"load": load, "threads": args.threads, "versions": versions, "time": rows, "memory": mem,
+                       "gemm": gemms, "gatbench_context": context}, f, indent=1)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -7,13 +7,13 @@ namespace gatcore {
 Tensor VarImpl::grad_if_any() const {
   if (base) {
     Tensor bg = base->grad_if_any();
-    return bg.defined() ? bg.cols_slice(col0, col0 + value.cols()) : Tensor{};
+    return bg.defined() ? bg.rows_slice(row0, row0 + value.rows()).cols_slice(col0, col0 + value.cols()) : Tensor{};
   }
   return grad;
 }
 
 Tensor VarImpl::grad_or_zeros() {
-  if (base) return base->grad_or_zeros().cols_slice(col0, col0 + value.cols());
+  if (base) return base->grad_or_zeros().rows_slice(row0, row0 + value.rows()).cols_slice(col0, col0 + value.cols());
   if (!grad.defined()) grad = backend(value.device()).zeros(value.rows(), value.cols());
   return grad;
 }
@@ -36,14 +36,26 @@ void Var::zero_grad() const {
 }
 
 Var Var::cols_slice(std::int64_t c0, std::int64_t c1) const {
+  Var v = view(impl_->value.cols_slice(c0, c1), 0, c0);
+  v.impl_->name = impl_->name.empty() ? std::string{} : impl_->name + detail::cat("[:,", c0, ":", c1, "]");
+  return v;
+}
+
+Var Var::rows_slice(std::int64_t r0, std::int64_t r1) const {
+  Var v = view(impl_->value.rows_slice(r0, r1), r0, 0);
+  v.impl_->name = impl_->name.empty() ? std::string{} : impl_->name + detail::cat("[", r0, ":", r1, ",:]");
+  return v;
+}
+
+Var Var::view(Tensor value, std::int64_t r0, std::int64_t c0) const {
   Var v;
   v.impl_ = std::make_shared<VarImpl>();
-  v.impl_->value = impl_->value.cols_slice(c0, c1);
+  v.impl_->value = std::move(value);
   v.impl_->requires_grad = impl_->requires_grad;
   // Views of views point at the root so gradients meet in one buffer.
   v.impl_->base = impl_->base ? impl_->base : impl_;
+  v.impl_->row0 = (impl_->base ? impl_->row0 : 0) + r0;
   v.impl_->col0 = (impl_->base ? impl_->col0 : 0) + c0;
-  v.impl_->name = impl_->name.empty() ? std::string{} : impl_->name + detail::cat("[:,", c0, ":", c1, "]");
   return v;
 }
 

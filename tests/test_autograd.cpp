@@ -156,6 +156,18 @@ TEST_CASE("gradcheck pooling ops", "[autograd]") {
     gradcheck::check("broadcast_segments",
                      [g](const std::vector<Var>& v) { return broadcast_segments(g, segment_max(g, v[0])); }, {x});
   }
+  SECTION("linear_segment_bias, with the two row blocks of one weight") {
+    // NeuroSkinning's classifier input: x ++ broadcast(g) times one weight,
+    // split as x W[0:3] + broadcast(g W[3:5] + b). Checks the op's
+    // gradients and that row-slice views of W accumulate into W's gradient.
+    gradcheck::check("linear_segment_bias",
+                     [g](const std::vector<Var>& v) {
+                       Var s = linear(v[2], v[1].rows_slice(3, 5), v[3]);
+                       return linear_segment_bias(g, v[0], v[1].rows_slice(0, 3), s);
+                     },
+                     {random_tensor(g->num_nodes, 3, rng), random_tensor(5, 4, rng),
+                      random_tensor(g->num_segments(), 2, rng), random_tensor(1, 4, rng)});
+  }
   SECTION("neighbour mean over a non-symmetric neighbour graph") {
     std::vector<std::vector<std::int32_t>> nb = {{0, 1, 2}, {1, 3}, {}, {0, 1, 2, 3}, {4, 0}};
     GraphPtr ng = share(graph_from_neighbour_lists(5, nb));
@@ -241,6 +253,33 @@ TEST_CASE("dense buffer: blocks writing into slots give the gradients of an expl
     REQUIRE(a[k].defined());
     for (std::int64_t i = 0; i < a[k].numel(); ++i)
       REQUIRE(a[k].at(i / a[k].cols(), i % a[k].cols()) == Approx(b[k].at(i / b[k].cols(), i % b[k].cols())).margin(1e-5));
+  }
+}
+
+TEST_CASE("linear_segment_bias on row slices gives the values and gradients of linear(concat(x, broadcast))",
+          "[autograd]") {
+  auto rng = rng_for(7);
+  CsrGraph a = fixtures::grid_graph(3, 4), b = fixtures::grid_graph(2, 5), c = fixtures::grid_graph(4, 2);
+  GraphPtr g = share(batch_graphs({&a, &b, &c}));
+  const std::int64_t n = g->num_nodes, S = g->num_segments();
+  Tensor x0 = random_tensor(n, 5, rng), g0 = random_tensor(S, 3, rng), W0 = random_tensor(8, 6, rng),
+         b0 = random_tensor(1, 6, rng), R = random_tensor(n, 6, rng);
+  auto run = [&](bool split, std::vector<Tensor>& out) {
+    Var x(x0.clone(), true), gl(g0.clone(), true), W(W0.clone(), true), bias(b0.clone(), true);
+    Var y = split ? linear_segment_bias(g, x, W.rows_slice(0, 5), linear(gl, W.rows_slice(5, 8), bias))
+                  : linear(concat({x, broadcast_segments(g, gl)}), W, bias);
+    backward(sum(mul(y, Var(R))));
+    out = {y.value(), x.grad(), gl.grad(), W.grad(), bias.grad()};
+  };
+  std::vector<Tensor> s, r;
+  run(true, s);
+  run(false, r);
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    INFO("output " << k);
+    REQUIRE(s[k].defined());
+    REQUIRE(s[k].same_shape(r[k]));
+    for (std::int64_t i = 0; i < s[k].rows(); ++i)
+      for (std::int64_t j = 0; j < s[k].cols(); ++j) REQUIRE(s[k].at(i, j) == Approx(r[k].at(i, j)).margin(1e-5));
   }
 }
 

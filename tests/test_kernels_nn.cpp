@@ -46,9 +46,13 @@ TEST_CASE("gemm: transpose combinations, alpha/beta, strided views, odd sizes", 
   // {33, 4100, 17}: a long k with a small C (split into k chunks).
   // {130, 400, 40} and {250, 70, 8}: several k blocks, row blocks and partial
   // register tiles of the packed AVX-512 kernel (both its 32- and 16-wide
-  // paths); {100, 500, 3}: its narrow transposed-A path with a partial vector.
+  // paths); {100, 500, 3}: its narrow transposed-A path with a partial vector;
+  // {150, 300, 200} and {37, 45, 130}: n >= 128, where A row blocks are packed
+  // too (16 x 16 register transposes with partial row panels, k tails of a
+  // block that are not multiples of 16, a last B panel of 8 columns).
   const Sz sizes[] = {{1, 1, 1},      {1, 7, 1},       {17, 33, 5},    {5, 1, 9},    {64, 130, 70},
-                      {129, 257, 33}, {33, 4100, 17}, {130, 400, 40}, {250, 70, 8}, {100, 500, 3}};
+                      {129, 257, 33}, {33, 4100, 17}, {130, 400, 40}, {250, 70, 8}, {100, 500, 3},
+                      {150, 300, 200}, {37, 45, 130}};
   const std::pair<float, float> ab[] = {{1.0f, 0.0f}, {0.5f, 2.0f}, {-1.25f, 1.0f}};
   for (auto level : simd_levels()) {
     Simd simd(level);

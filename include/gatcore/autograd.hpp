@@ -24,11 +24,13 @@ struct VarImpl {
   Tensor grad;  // undefined until a gradient arrives (own grad; unused for views)
   bool requires_grad = false;
   std::string name;
-  // A column-slice view of another Var: its gradient is the same slice of the
-  // base's gradient, so writes of a DenseNet block into its slot and reads of
-  // the prefix by later blocks all meet in one gradient buffer.
+  // A slice view of another Var: its gradient is the same slice of the base's
+  // gradient, so writes of a DenseNet block into its slot and reads of the
+  // prefix by later blocks all meet in one gradient buffer (column slices),
+  // and the row blocks of one weight used by two products accumulate into
+  // that weight's gradient (row slices).
   std::shared_ptr<VarImpl> base;
-  std::int64_t col0 = 0;
+  std::int64_t row0 = 0, col0 = 0;
 
   // The gradient if any has arrived, else an undefined tensor.
   Tensor grad_if_any() const;
@@ -56,12 +58,16 @@ class Var {
   Tensor grad_or_zeros() const { return impl_->grad_or_zeros(); }
   void zero_grad() const;  // drops the gradient (next backward starts from zero)
 
-  // Differentiable column slice [c0, c1): a view sharing value and gradient.
+  // Differentiable column slice [c0, c1) / row slice [r0, r1): views sharing
+  // value and gradient.
   Var cols_slice(std::int64_t c0, std::int64_t c1) const;
+  Var rows_slice(std::int64_t r0, std::int64_t r1) const;
 
   const std::shared_ptr<VarImpl>& impl() const { return impl_; }
 
  private:
+  // A view of `value` (a slice of this Var's value at rows r0.., columns c0..).
+  Var view(Tensor value, std::int64_t r0, std::int64_t c0) const;
   std::shared_ptr<VarImpl> impl_;
 };
 

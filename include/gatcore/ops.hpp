@@ -71,6 +71,11 @@ Var gat_dot(const GraphPtr& g, const Var& z, int heads, float scale = 1.0f, cons
 // ---- pooling ------------------------------------------------------------------------
 Var segment_max(const GraphPtr& g, const Var& x);                  // [segments, C] over g->segment_ptr
 Var broadcast_segments(const GraphPtr& g, const Var& x);           // [segments, C] -> [n, C]
+// x·W + s[segment(i)] (s [segments, out]): a Linear layer whose input is
+// x ++ a per-segment feature g, computed as x·W₁ + broadcast(g·W₂) so the
+// per-segment product runs once per segment instead of once per row, and the
+// concatenation and the broadcast [n, C] tensor are never built.
+Var linear_segment_bias(const GraphPtr& g, const Var& x, const Var& W, const Var& s);
 Var neighbour_mean(const GraphPtr& nbr, const Var& x, const Var& into = {});  // mean over rows of nbr
 
 // ---- reductions and losses ([1, 1] results) -----------------------------------------------

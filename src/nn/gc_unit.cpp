@@ -11,17 +11,23 @@ GcUnit::GcUnit(const Scope& s, std::int64_t in_, const GcUnitOptions& o, Rng& rn
 }
 
 Var GcUnit::forward(const GraphPtr& g, const GraphPtr& nbr, const Var& x) const {
-  const std::int64_t c = std::int64_t(opt.heads) * opt.head_dim;
   Var out(backend(x.device()).empty(x.rows(), this->out()));
   copy_into(x, out.cols_slice(0, in));
-  Var conv_slot = out.cols_slice(in, in + c);
+  return forward_into(g, nbr, out);
+}
+
+Var GcUnit::forward_into(const GraphPtr& g, const GraphPtr& nbr, const Var& buf) const {
+  GATCORE_CHECK(buf.cols() == out(), "GcUnit: buffer has ", buf.cols(), " columns, expected ", out());
+  const std::int64_t c = std::int64_t(opt.heads) * opt.head_dim;
+  const Var x = buf.cols_slice(0, in);
+  Var conv_slot = buf.cols_slice(in, in + c);
   Var att = gat_dot(g, C.forward(x), opt.heads, 1.f / std::sqrt(float(opt.head_dim)));
   leaky_relu(att, opt.slope, conv_slot);
   if (opt.pool) {
     GATCORE_CHECK(nbr != nullptr, "GcUnit: pooling needs a neighbour graph (pool size ", opt.pool_size, ")");
-    neighbour_mean(nbr, conv_slot, out.cols_slice(in + c, in + 2 * c));
+    neighbour_mean(nbr, conv_slot, buf.cols_slice(in + c, in + 2 * c));
   }
-  return out;
+  return buf;
 }
 
 }  // namespace gatcore::nn

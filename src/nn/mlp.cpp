@@ -17,7 +17,17 @@ Var DenseLayer::forward(const Var& x, bool training, Rng& rng, const Var& into) 
   const bool has_act = opt.act != Activation::identity;
   const bool has_drop = training && opt.dropout > 0.f;
   // `into` goes to the last op of the chain.
-  Var y = linear(x, lin.W, lin.b, (!use_bn && !has_act && !has_drop) ? into : Var{});
+  return after_linear(linear(x, lin.W, lin.b, (!use_bn && !has_act && !has_drop) ? into : Var{}), training, rng,
+                      into);
+}
+
+Var DenseLayer::after_linear(const Var& z, bool training, Rng& rng, const Var& into) {
+  GATCORE_CHECK(!(training && folded), "DenseLayer: BatchNorm was folded for inference; cannot train");
+  const bool use_bn = opt.batch_norm && !folded;
+  const bool has_act = opt.act != Activation::identity;
+  const bool has_drop = training && opt.dropout > 0.f;
+  if (!use_bn && !has_act && !has_drop) return into.defined() && z.impl() != into.impl() ? copy_into(z, into) : z;
+  Var y = z;
   if (use_bn) y = bn.forward(y, training, (!has_act && !has_drop) ? into : Var{});
   if (has_act) y = activation(opt.act, y, opt.slope, has_drop ? Var{} : into);
   if (has_drop) {
@@ -46,9 +56,11 @@ Mlp::Mlp(const Scope& s, std::int64_t in, const std::vector<std::int64_t>& hidde
   }
 }
 
-Var Mlp::forward(const Var& x, bool training, Rng& rng) {
+Var Mlp::forward(const Var& x, bool training, Rng& rng, std::size_t from) {
+  GATCORE_CHECK(from <= layers.size(), "Mlp::forward: from = ", from, " but the MLP has ", layers.size(),
+                " hidden layers");
   Var y = x;
-  for (auto& l : layers) y = l.forward(y, training, rng);
+  for (std::size_t k = from; k < layers.size(); ++k) y = layers[k].forward(y, training, rng);
   if (has_last) y = last.forward(y);
   return y;
 }

@@ -27,8 +27,8 @@ Var linear(const Var& x, const Var& W, const Var& b, const Var& into) {
                                xs = SavedTensor(x.value(), "x"), Ws = SavedTensor(W.value(), "W")] {
       Tensor dy = yi->grad_if_any();
       if (!dy.defined()) return;
-      if (xi->requires_grad) be.gemm(dy, false, Ws.get(op), true, xi->grad_or_zeros(), 1.0f, 1.0f);
-      if (Wi->requires_grad) be.gemm(xs.get(op), true, dy, false, Wi->grad_or_zeros(), 1.0f, 1.0f);
+      accumulate_grad(be, xi, [&](const Tensor& dx, float beta) { be.gemm(dy, false, Ws.get(op), true, dx, 1.0f, beta); });
+      accumulate_grad(be, Wi, [&](const Tensor& dW, float beta) { be.gemm(xs.get(op), true, dy, false, dW, 1.0f, beta); });
       if (bi && bi->requires_grad) be.column_sums_accumulate(dy, bi->grad_or_zeros());
     });
   }

@@ -213,6 +213,34 @@ Var broadcast_segments(const GraphPtr& g, const Var& x) {
   return y;
 }
 
+Var linear_segment_bias(const GraphPtr& g, const Var& x, const Var& W, const Var& s) {
+  static const char* op = "linear_segment_bias";
+  check_var(op, "x", x);
+  check_var(op, "W", W);
+  check_var(op, "s", s);
+  check_graph(op, g, x.rows(), "x");
+  GATCORE_CHECK(x.cols() == W.rows(), op, ": x ", x.value().shape_str(), " does not match W ",
+                W.value().shape_str(), " (x.cols must equal W.rows)");
+  GATCORE_CHECK(s.rows() == g->num_segments() && s.cols() == W.cols(), op, ": s ", s.value().shape_str(),
+                " must be [", g->num_segments(), " segments, ", W.cols(), "]");
+  Backend& be = backend_of(op, {&x, &W, &s});
+  const bool grad = needs_grad({&x, &W, &s});
+  Var y(be.empty(x.rows(), W.cols()), grad);
+  // y = s[segment(i)], then y += x W: one pass over y besides the product.
+  be.broadcast_segments_forward(s.value(), g->segment_ptr, y.value());
+  be.gemm(x.value(), false, W.value(), false, y.value(), 1.0f, 1.0f);
+  if (grad)
+    current_tape().record(op, [&be, g, xi = x.impl(), Wi = W.impl(), si = s.impl(), yi = y.impl(),
+                               xs = SavedTensor(x.value(), "x"), Ws = SavedTensor(W.value(), "W")] {
+      Tensor dy = yi->grad_if_any();
+      if (!dy.defined()) return;
+      accumulate_grad(be, xi, [&](const Tensor& dx, float beta) { be.gemm(dy, false, Ws.get(op), true, dx, 1.0f, beta); });
+      accumulate_grad(be, Wi, [&](const Tensor& dW, float beta) { be.gemm(xs.get(op), true, dy, false, dW, 1.0f, beta); });
+      if (si->requires_grad) be.broadcast_segments_backward(dy, g->segment_ptr, si->grad_or_zeros());
+    });
+  return y;
+}
+
 Var neighbour_mean(const GraphPtr& nbr, const Var& x, const Var& into) {
   static const char* op = "neighbour_mean";
   check_var(op, "x", x);

@@ -24,6 +24,23 @@ void check_same_shape(const char* op, const char* a_name, const Tensor& a, const
 inline Tensor grad_for(const ImplPtr& p) { return p && p->requires_grad ? p->grad_or_zeros() : Tensor{}; }
 inline ImplPtr impl_if(const Var& v) { return v.defined() ? v.impl() : nullptr; }
 
+// Runs kernel(grad, beta) for a kernel that computes grad = beta grad + term:
+// a parameter or tensor whose gradient has not arrived yet gets an
+// uninitialised buffer written with beta = 0 (no zero fill, no extra pass);
+// otherwise (also for every view, whose base may hold other gradients) it
+// accumulates with beta = 1. Either way the term is computed the same way, so
+// the result is bitwise the same as accumulating onto zeros.
+template <class F>
+void accumulate_grad(Backend& be, const ImplPtr& p, F&& kernel) {
+  if (!p || !p->requires_grad) return;
+  if (!p->base && !p->grad.defined()) {
+    p->grad = be.empty(p->value.rows(), p->value.cols());
+    kernel(p->grad, 0.0f);
+  } else {
+    kernel(p->grad_or_zeros(), 1.0f);
+  }
+}
+
 // Adds the result of a kernel that *overwrites* its gradient output: straight
 // into a fresh gradient, or through a temporary when one already exists.
 template <class F>

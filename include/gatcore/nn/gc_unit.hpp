@@ -30,6 +30,11 @@ struct GcUnit {
   }
   // nbr: row i = the pool_size nearest vertices of i (required if opt.pool).
   Var forward(const GraphPtr& g, const GraphPtr& nbr, const Var& x) const;
+  // The same on a buffer [n, out()] whose columns [0, in) already hold x
+  // (written there by the previous unit): writes the rest, returns buf. A
+  // chain of units then shares one buffer (each unit's input is the prefix of
+  // the next one's) instead of copying its input forward.
+  Var forward_into(const GraphPtr& g, const GraphPtr& nbr, const Var& buf) const;
 };
 
 }  // namespace gatcore::nn

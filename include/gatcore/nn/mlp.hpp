@@ -27,6 +27,9 @@ struct DenseLayer {
   DenseLayer() = default;
   DenseLayer(const Scope& s, std::int64_t in, std::int64_t out, const DenseLayerOptions& opt, Rng& rng);
   Var forward(const Var& x, bool training, Rng& rng, const Var& into = {});
+  // The part after the Linear ([BatchNorm] → activation → [dropout]) on its
+  // output z, for callers that compute the product themselves.
+  Var after_linear(const Var& z, bool training, Rng& rng, const Var& into = {});
   void fold();
   std::int64_t out() const { return lin.out; }
 };
@@ -40,7 +43,8 @@ struct Mlp {
   Mlp() = default;
   Mlp(const Scope& s, std::int64_t in, const std::vector<std::int64_t>& hidden, std::int64_t out,
       const DenseLayerOptions& opt, Rng& rng);
-  Var forward(const Var& x, bool training, Rng& rng);
+  // Layers from `from` on (from = 1: the caller ran the first layer itself).
+  Var forward(const Var& x, bool training, Rng& rng, std::size_t from = 0);
   void fold();
   std::int64_t out_width(std::int64_t in) const;
 };
