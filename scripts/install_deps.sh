@@ -16,6 +16,9 @@ packages=(
   clang libclang-rt-14-dev
   # checkpoint_python_resave: a venv for Python's safetensors (pip).
   python3-venv
+  # Data-parallel training (src/dist/): Open MPI's library and mpirun, which
+  # the tests/dist/ tests launch at 2 and 4 ranks.
+  libopenmpi-dev openmpi-bin
 )
 
 missing=()

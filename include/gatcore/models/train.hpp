@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/model.hpp"
 #include "gatcore/models/sample.hpp"
 #include "gatcore/optim.hpp"
@@ -83,6 +84,9 @@ struct EpochStats {
   float lr = 0;
   std::int64_t batches = 0, samples = 0;
   double seconds = 0;
+  // Data parallel: this rank's bytes sent and seconds spent in collectives
+  // during the epoch (0 in one process).
+  double comm_bytes = 0, comm_seconds = 0;
 };
 
 // Called after every batch: (epoch, batch index, batches in epoch, loss).
@@ -91,15 +95,45 @@ using BatchCallback = std::function<void(int, std::int64_t, std::int64_t, double
 // Trains where the model's parameters are (Model::to before constructing the
 // Trainer): each batch is built on the host and moved to the device once;
 // the loss read is the step's only transfer back.
+//
+// Data parallel (`comm` of more than one rank, e.g. dist::world() under
+// mpirun): every rank draws the same batches (order and vertex selections)
+// as one process would, builds only its share of each batch's characters
+// (dist::share_of), runs forward and backward on it with BatchNorm
+// statistics summed over the ranks (SyncBatchNorm, batch_split.hpp) and
+// Dropout masks cut from the whole batch's stream, and the gradients are
+// summed over the ranks (one flat buffer, a fixed order) before the same
+// Adam step on every rank. Validation is sharded by sample and gathered
+// exactly. Each epoch starts from rank 0's parameters and moments.
+//
+// What equals one process, and why not everything bit for bit: for a fixed
+// N a run is bit-reproducible, and the sharded validation loss of a model is
+// the one-process number bitwise. The training step is not: a rank's
+// backward sums its own rows' contributions to each weight gradient inside
+// its GEMMs, so N groups the float sums differently (and BatchNorm's double
+// statistics likewise). Bitwise equality would need every parameter-gradient
+// kernel to keep per-character partial sums and the ranks to exchange them
+// all (batch size × the gradient volume). Measured instead (tests/dist/):
+// step 1's summed gradient agrees to < 1e-6 of its largest value, step
+// losses to < 1e-5 relative; Adam turns rounding-level gradients (a bias
+// right before a BatchNorm, whose gradient is zero but for rounding) into
+// ~lr steps in any run, so checkpoints are compared on the parameters that
+// carry a gradient: within 0.25 lr after 3 steps (measured <= 0.05 lr).
 class Trainer {
  public:
-  Trainer(Model& model, TrainOptions opt, Normaliser norm);
+  Trainer(Model& model, TrainOptions opt, Normaliser norm, dist::Communicator& comm = dist::world());
   // One pass over `train` in a seeded random order; validation (full meshes,
   // eval mode) if `val` is non-empty; then the schedule's lr update.
   EpochStats run_epoch(const std::vector<Sample>& train, const std::vector<Sample>& val = {},
                        const BatchCallback& on_batch = {});
   // Mean loss over full meshes in eval mode.
   double evaluate(const std::vector<Sample>& samples);
+  // Which of `count` training samples the next run_epoch makes this rank
+  // build a batch from (its shares, and the first sample of a batch it has
+  // no share of); all of them in one process. The others may be stubs that
+  // only carry their graph's vertex count (character::training_samples'
+  // `build`): every rank draws every sample's vertex selection.
+  std::vector<bool> samples_needed(std::size_t count) const;
 
   Model& model() { return model_; }
   Adam& optimiser() { return adam_; }
@@ -108,11 +142,16 @@ class Trainer {
   int epoch() const { return epoch_; }
   nn::Rng& rng() { return rng_; }
   PlateauScheduler& plateau() { return plateau_; }
+  dist::Communicator& communicator() { return comm_; }
   // Restores the resumable state (checkpoints).
   void set_epoch(int e) { epoch_ = e; }
 
  private:
+  // One optimiser step on the global batch `smp` / `sel`; returns its loss.
+  double step(const std::vector<const Sample*>& smp, const std::vector<std::vector<std::int32_t>>& sel,
+              const std::vector<int>& pools);
   Model& model_;
+  dist::Communicator& comm_;
   TrainOptions opt_;
   Normaliser norm_;
   Adam adam_;
