@@ -64,7 +64,9 @@ int cmd_errormap(int argc, char** argv) {
   const PreparedCharacter pc = prepare_character(load_character(in));
   Pose pose;
   if (!motion.empty()) {
-    const Clip clip = retarget(load_bvh(motion), pc.character.skeleton, mat4_identity());
+    RetargetOptions ro;
+    ro.target_name = in;
+    const Clip clip = retarget(load_bvh(motion), pc.character.skeleton, mat4_identity(), ro);
     GATCORE_CHECK(frame >= 0 && frame < static_cast<long>(clip.frames.size()), motion, ": --frame ", frame,
                   " outside [0, ", clip.frames.size(), ")");
     pose = clip.frames[static_cast<std::size_t>(frame)];
