@@ -305,14 +305,18 @@ Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_
   }
   b.hips_t = mt.find("pelvis");
   // Pairs by body part; spine and neck chains of different lengths by
-  // relative position (each target link takes the source link at the same
-  // fraction of the chain, the top onto the top).
+  // relative position: each target link takes the source link at the same
+  // fraction of the chain. The spine's top goes onto the top (the chest
+  // carries the arms); the neck's base onto the base (a one-link neck
+  // follows the source's first neck link).
   for (const char* base : {"spine", "neck"}) {
     const auto tc = chain_of(mt, base), sc = chain_of(ms, base);
     if (tc.empty() || sc.empty()) continue;
     const double T = static_cast<double>(tc.size()), S = static_cast<double>(sc.size());
+    const bool top = std::string(base) == "spine";
     for (std::size_t i = 0; i < tc.size(); ++i) {
-      const long k = std::lround((static_cast<double>(i) + 1.0) * S / T) - 1;
+      const double x = static_cast<double>(i);
+      const long k = top ? std::lround((x + 1.0) * S / T) - 1 : static_cast<long>(std::floor(x * S / T));
       b.source_of[tc[i]] = sc[static_cast<std::size_t>(std::clamp<long>(k, 0, static_cast<long>(sc.size()) - 1))];
     }
   }
