@@ -242,3 +242,20 @@ TEST_CASE("the shared characters map as before: Quaternius humanoids, animals re
   CHECK(mp.convention == "Quaternius (older: feet on the root)");
   CHECK(mp.humanoid());
 }
+
+TEST_CASE("the structural fallback reads unnamed rigs whichever way they face", "[character][rig]") {
+  const rigfix::Spec spec = spec_named("unnamed");
+  const Skeleton s = rigfix::skeleton(spec);
+  const auto lm = landmarks(spec, false);
+  for (float degrees : {0.0f, 90.0f, 180.0f, -90.0f}) {
+    INFO("facing turned by " << degrees);
+    Transform turn;
+    turn.rotation = quat_from_axis_angle({0.0f, 1.0f, 0.0f}, degrees * 3.14159265f / 180.0f);
+    const RigMapping m = map_rig(s, {}, to_matrix(turn));
+    INFO(describe_rig(s, m));
+    CHECK(m.convention == "structural");
+    REQUIRE(m.humanoid());
+    for (const char* part : {"thigh.l", "shin.r", "foot.l", "upperarm.l", "forearm.r", "hand.r", "head"})
+      CHECK(lm.at(s.names[m.find(part)]) == landmark_of_part(part));
+  }
+}

@@ -284,27 +284,44 @@ std::string describe_rig(const Skeleton& s, const RigMapping& m) {
     out += " (not a humanoid to retarget onto; --alias JOINT=PART maps a joint by hand)\n";
   }
   out += "body map\n";
-  // Parts in body order, chains in link order.
-  std::vector<std::pair<std::string, std::int32_t>> rows;
-  auto order = [](const std::string& part) {
-    static const char* seq[] = {"pelvis", "spine", "neck", "head", "clavicle", "upperarm", "forearm", "hand",
-                                "thumb", "index", "middle", "ring", "pinky", "thigh", "shin", "foot", "toe"};
-    int side = part.size() > 2 && part.substr(part.size() - 2) == ".r" ? 1 : 0;
-    for (int i = 0; i < 17; ++i)
-      if (part.rfind(seq[i], 0) == 0) return i * 2 + side;
-    return 99;
+  // One row per part, left | right; chains in link order; fingers counted.
+  char line[1024];
+  auto names_of = [&](const std::string& base, const std::string& side) {
+    std::string n;
+    for (int i = 0; i <= 9; ++i) {
+      const std::string part = base + (i ? std::to_string(i) : std::string()) + side;
+      const std::int32_t j = m.find(part);
+      if (j < 0) continue;
+      n += (n.empty() ? "" : ", ") + s.names[j] + (m.by_structure[j] ? "*" : "");
+    }
+    return n;
   };
-  for (std::int32_t j = 0; j < s.num_joints(); ++j)
-    if (m.role[j] == JointRole::body) rows.push_back({m.body[j], j});
-  std::stable_sort(rows.begin(), rows.end(), [&](const auto& a, const auto& b) {
-    return order(a.first) != order(b.first) ? order(a.first) < order(b.first) : a.first < b.first;
-  });
-  char line[512];
-  for (const auto& [part, j] : rows) {
-    std::snprintf(line, sizeof line, "  %-12s %s%s\n", part.c_str(), s.names[j].c_str(),
-                  m.by_structure[j] ? "  (by structure)" : "");
-    out += line;
+  bool structural = false;
+  for (std::uint8_t b : m.by_structure) structural = structural || b;
+  for (const char* base : {"pelvis", "spine", "neck", "head"}) {
+    const std::string n = names_of(base, "");
+    if (!n.empty()) {
+      std::snprintf(line, sizeof line, "  %-9s %s\n", base, n.c_str());
+      out += line;
+    }
   }
+  auto row = [&](const char* label, const std::string& l, const std::string& r) {
+    if (l.empty() && r.empty()) return;
+    std::snprintf(line, sizeof line, "  %-9s %s | %s\n", label, l.empty() ? "-" : l.c_str(), r.empty() ? "-" : r.c_str());
+    out += line;
+  };
+  for (const char* base : {"clavicle", "upperarm", "forearm", "hand"}) row(base, names_of(base, ".l"), names_of(base, ".r"));
+  std::string fl, fr;
+  for (const char* f : {"thumb", "index", "middle", "ring", "pinky"})
+    for (const char* side : {".l", ".r"}) {
+      int n = 0;
+      for (int i = 1; i <= 3; ++i) n += m.find(f + std::to_string(i) + side) >= 0;
+      std::string& dst = side[1] == 'l' ? fl : fr;
+      if (n) dst += (dst.empty() ? "" : ", ") + std::string(f) + " " + std::to_string(n);
+    }
+  row("fingers", fl, fr);
+  for (const char* base : {"thigh", "shin", "foot", "toe"}) row(base, names_of(base, ".l"), names_of(base, ".r"));
+  if (structural) out += "  (* proposed by the structural fallback)\n";
   auto list = [&](JointRole r, const char* label) {
     std::string names;
     int n = 0;

@@ -76,24 +76,32 @@ void propose_by_structure(const Skeleton& s, const std::vector<Vec3>& pos, RigMa
   }
   // Exactly two feet: four (a quadruped) or eight (a spider) are not a humanoid.
   if (low.size() != 2 || head < 0) return;
-  // Facing: toes point forward (+Z unless the feet say otherwise); the
-  // character's left is +X when it faces +Z.
-  float forward = 0.0f;
+  // Facing: the toes point forward (else +Z); the character's left is
+  // up x forward... i.e. +X when it faces +Z. The lateral axis is the line
+  // between the feet, so rigs facing +X (CesiumMan) read as well as +Z ones.
+  Vec3 across = {pos[low[0]][0] - pos[low[1]][0], 0.0f, pos[low[0]][2] - pos[low[1]][2]};
+  const float width = std::sqrt(across[0] * across[0] + across[2] * across[2]);
+  if (width < 0.05f * H) return;
+  for (float& c : across) c /= width;
+  float toes = 0.0f;  // along forward = across x up = (-z, 0, x)
   for (std::int32_t f : low)
-    if (s.parents[f] >= 0) forward += pos[f][2] - pos[s.parents[f]][2];
-  const float left_sign = forward < 0.0f ? -1.0f : 1.0f;
-  std::int32_t foot_l = low[0], foot_r = low[1];
-  if (left_sign * (pos[foot_l][0] - pos[foot_r][0]) < 0.0f) std::swap(foot_l, foot_r);
-  if (std::abs(pos[foot_l][0] - pos[foot_r][0]) < 0.05f * H) return;
+    if (s.parents[f] >= 0)
+      toes += -across[2] * (pos[f][0] - pos[s.parents[f]][0]) + across[0] * (pos[f][2] - pos[s.parents[f]][2]);
+  const bool low0_left = toes != 0.0f ? toes > 0.0f : across[0] >= 0.0f;
+  const Vec3 left = low0_left ? across : Vec3{-across[0], 0.0f, -across[2]};
+  auto side_of = [&](std::int32_t j, std::int32_t from) {
+    return (pos[j][0] - pos[from][0]) * left[0] + (pos[j][2] - pos[from][2]) * left[2];
+  };
+  const std::int32_t foot_l = low0_left ? low[0] : low[1], foot_r = low0_left ? low[1] : low[0];
   const std::int32_t pelvis = common_ancestor(s, foot_l, foot_r);
   if (pelvis < 0 || pos[head][1] < pos[pelvis][1] + 0.2f * H) return;  // not upright
   // Hands: leaves above the knees, far to each side of the head.
   std::int32_t hand_l = -1, hand_r = -1;
   for (std::int32_t j : leaves) {
     if (j == head || pos[j][1] < lo + 0.3f * H) continue;
-    const float side = left_sign * (pos[j][0] - pos[head][0]);
-    if (side > 0.15f * H && (hand_l < 0 || side > left_sign * (pos[hand_l][0] - pos[head][0]))) hand_l = j;
-    if (side < -0.15f * H && (hand_r < 0 || side < left_sign * (pos[hand_r][0] - pos[head][0]))) hand_r = j;
+    const float side = side_of(j, head);
+    if (side > 0.15f * H && (hand_l < 0 || side > side_of(hand_l, head))) hand_l = j;
+    if (side < -0.15f * H && (hand_r < 0 || side < side_of(hand_r, head))) hand_r = j;
   }
   if (hand_l < 0 || hand_r < 0) return;
   const std::int32_t chest = common_ancestor(s, hand_l, hand_r);
@@ -139,7 +147,7 @@ void propose_by_structure(const Skeleton& s, const std::vector<Vec3>& pos, RigMa
     if (arm.size() < 3) continue;
     std::size_t upper = 0;
     if (arm.size() >= 4 && (dist(pos[arm[0]], pos[arm[1]]) < 0.6f * dist(pos[arm[1]], pos[arm[2]]) ||
-                            std::abs(pos[arm[0]][0] - pos[chest][0]) < 0.05f * H))
+                            std::abs(side_of(arm[0], chest)) < 0.05f * H))
       upper = 1;
     std::size_t hand = arm.size() - 1;
     for (std::size_t i = upper + 2; i < arm.size(); ++i)
