@@ -240,7 +240,7 @@ std::string refusal(const std::string& what, const Skeleton& s, const RigMapping
   for (std::size_t i = 0; i < m.missing.size(); ++i) missing += (i ? ", " : "") + m.missing[i];
   return detail::cat(what, " is not a humanoid the retargeter can drive (convention: ", m.convention,
                      "): no joint maps to ", missing, "; joints not recognised: ", unmapped_joint_list(s, m),
-                     ". Name them with --alias JOINT=PART (PART: pelvis, spine, neck, head, clavicle.l, upperarm.l, "
+                     "; name them with --alias JOINT=PART (PART: pelvis, spine, neck, head, clavicle.l, upperarm.l, "
                      "forearm.l, hand.l, thigh.l, shin.l, foot.l, toe.l, or .r; or a joint name of a known convention)");
 }
 

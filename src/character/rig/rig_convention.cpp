@@ -263,16 +263,25 @@ RigMapping map_rig(const Skeleton& s, const BoneAliases& aliases, const Mat4& bi
 }
 
 std::string unmapped_joint_list(const Skeleton& s, const RigMapping& m, std::size_t limit) {
+  // Limb-looking names first: those are what an --alias has to name.
+  auto limb = [](const std::string& name) {
+    const std::string k = rig_key(name);
+    for (const char* x : {"leg", "arm", "thigh", "shin", "calf", "foot", "hand", "shoulder", "hip", "knee", "elbow",
+                          "pelvis", "clav"})
+      if (k.find(x) != std::string::npos) return true;
+    return false;
+  };
   std::string out;
   std::size_t n = 0;
-  for (std::int32_t j = 0; j < s.num_joints(); ++j) {
-    if (m.role[j] != JointRole::other) continue;
-    if (n == limit) {
-      out += ", ...";
-      break;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::int32_t j = 0; j < s.num_joints(); ++j) {
+      if (m.role[j] != JointRole::other || limb(s.names[j]) != (pass == 0)) continue;
+      if (n++ == limit) {
+        out += ", ...";
+        return out;
+      }
+      out += (n > 1 ? ", '" : "'") + s.names[j] + "'";
     }
-    out += (n++ ? ", '" : "'") + s.names[j] + "'";
-  }
   return out.empty() ? "(none)" : out;
 }
 
