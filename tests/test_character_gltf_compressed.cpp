@@ -100,8 +100,10 @@ void require_extension(Glb& g, const char* name) {
   g.j["extensionsRequired"].push_back(name);
 }
 
-// Every primitive Draco-compressed (sequential encoding, no quantisation: lossless).
-Glb draco_version(Glb g) {
+// Every primitive Draco-compressed: sequential encoding without quantisation
+// (lossless), or as exporters write it (edgebreaker, which reorders points,
+// with 14-bit positions).
+Glb draco_version(Glb g, bool quantised = false) {
   for (auto& mesh : g.j["meshes"])
     for (auto& p : mesh["primitives"]) {
       const std::size_t ia = p["indices"];
@@ -139,7 +141,12 @@ Glb draco_version(Glb g) {
         dm.AddFace(face);
       }
       draco::Encoder enc;
-      enc.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+      if (quantised) {
+        enc.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
+        enc.SetAttributeQuantization(draco::GeometryAttribute::POSITION, 14);
+      } else {
+        enc.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+      }
       draco::EncoderBuffer out;
       REQUIRE(enc.EncodeMeshToBuffer(dm, &out).ok());
       const std::size_t at = append(g, std::vector<unsigned char>(out.data(), out.data() + out.size()));
@@ -251,6 +258,42 @@ TEST_CASE("Draco and meshopt glTF files load with the geometry of their plain fo
     const Glb written = read_glb(out);
     CHECK_FALSE(written.j.contains("extensionsRequired"));
   }
+}
+
+TEST_CASE("a Draco file as exporters write it (edgebreaker, quantised positions) loads the same surface",
+          "[character][gltf][compressed]") {
+  const std::string plain = temp("plain3.glb");
+  save_gltf_character(procedural_character(), plain);
+  const Character ref = load_gltf(plain);
+  const std::string path = temp("draco_q.glb");
+  write_glb(draco_version(read_glb(plain), true), path);
+  const Character ch = load_gltf(path);
+  REQUIRE(ch.mesh.num_vertices() == ref.mesh.num_vertices());
+  CHECK(ch.mesh.num_triangles() == ref.mesh.num_triangles());
+  CHECK(ch.skeleton.inverse_bind == ref.skeleton.inverse_bind);
+  // Every vertex within the quantisation step of a plain vertex, with the same weights.
+  float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+  for (std::size_t i = 0; i < ref.mesh.positions.size(); ++i)
+    lo[i % 3] = std::min(lo[i % 3], ref.mesh.positions[i]), hi[i % 3] = std::max(hi[i % 3], ref.mesh.positions[i]);
+  const float step = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) / 16383.0f;
+  int far = 0, other_weights = 0;
+  for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) {
+    std::int64_t best = -1;
+    float bd = 1e30f;
+    for (std::int64_t u = 0; u < ref.mesh.num_vertices(); ++u) {
+      float d = 0.0f;
+      for (int c = 0; c < 3; ++c) d = std::max(d, std::abs(ch.mesh.positions[3 * v + c] - ref.mesh.positions[3 * u + c]));
+      if (d < bd) bd = d, best = u;
+    }
+    far += bd > step;
+    const auto& a = ch.mesh.weights;
+    const auto& b = ref.mesh.weights;
+    const bool same = a.ptr[v + 1] - a.ptr[v] == b.ptr[best + 1] - b.ptr[best] &&
+                      std::equal(a.joint.begin() + a.ptr[v], a.joint.begin() + a.ptr[v + 1], b.joint.begin() + b.ptr[best]);
+    other_weights += !same;
+  }
+  CHECK(far == 0);
+  CHECK(other_weights == 0);
 }
 
 TEST_CASE("required glTF extensions gatcore cannot read, and broken compressed data, are refused by name",
