@@ -68,13 +68,14 @@ void check_mapping(const rigfix::Spec& spec, const Skeleton& s, const RigMapping
 }
 
 // The pose every source plays: left knee bent 45 degrees, right thigh 30
-// forward, left arm 30 down, right elbow 60, the whole body moved. (No pelvis
+// forward, left arm 30 down, right elbow 60, left index finger curled 40,
+// the whole body moved. (No pelvis
 // turn: rigs whose legs hang off the root above the pelvis, like Quaternius,
 // do not turn their legs with it.)
 std::vector<rigfix::PartPose> known_pose() {
   rigfix::PartPose p;
   p.zxy = {{"shin.L", {0, 45, 0}}, {"thigh.R", {0, -30, 0}}, {"upperarm.L", {-30, 0, 0}},
-           {"forearm.R", {0, 0, 60}}};
+           {"forearm.R", {0, 0, 60}}, {"finger:index:1.L", {-40, 0, 0}}};
   p.move = {0.1f, -0.05f, 0.3f};
   return {p};
 }
@@ -117,7 +118,7 @@ TEST_CASE("every rig convention maps by itself as a BVH motion", "[character][ri
 
 TEST_CASE("a known pose moves every mapped limb, from every convention onto every other", "[character][rig][retarget]") {
   const auto specs = rigfix::specs();
-  int pairs = 0;
+  int pairs = 0, fingers = 0;
   for (const rigfix::Spec& src : specs) {
     const Motion motion = load_bvh(charfix::write_temp(src.id + "_pose.bvh", rigfix::bvh(src, known_pose())));
     const RigMapping ms = map_rig(motion.skeleton);
@@ -145,10 +146,21 @@ TEST_CASE("a known pose moves every mapped limb, from every convention onto ever
                   << b[0] / dst.units << " " << b[1] / dst.units << " " << b[2] / dst.units);
         for (int k = 0; k < 3; ++k) CHECK(b[k] / dst.units == Approx(a[k] / src.units).margin(0.02));
       }
+      // Fingers move when both sides have them: the left index curls down
+      // (its tip drops about 4 cm; 1 cm tolerance).
+      if (ms.find("index3.l") >= 0 && mt.find("index3.l") >= 0) {
+        const Vec3 a = sub(spos("index3.l"), spos("hand.l")), b = sub(tpos("index3.l"), tpos("hand.l"));
+        INFO("index3.l from the hand: source " << a[0] / src.units << " " << a[1] / src.units << " " << a[2] / src.units
+                                               << ", target " << b[0] / dst.units << " " << b[1] / dst.units << " "
+                                               << b[2] / dst.units);
+        for (int k = 0; k < 3; ++k) CHECK(b[k] / dst.units == Approx(a[k] / src.units).margin(0.01));
+        ++fingers;
+      }
       ++pairs;
     }
   }
   CHECK(pairs == static_cast<int>(specs.size() * specs.size()));
+  CHECK(fingers >= 60);
 }
 
 TEST_CASE("rigs that are not humanoids are refused by name, or get root motion only on request", "[character][rig][retarget]") {
