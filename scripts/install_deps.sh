@@ -8,6 +8,8 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libomp-dev libtbb-dev catch2 libbenchmark-dev
   libtinygltf-dev nlohmann-json3-dev libassimp-dev
+  # compressed glTF (KHR_draco_mesh_compression, EXT_meshopt_compression)
+  libdraco-dev libmeshoptimizer-dev
   # Vulkan backend: headers/loader, the GLSL compiler, and Mesa lavapipe (a
   # CPU Vulkan device) so the Vulkan tests run without a GPU.
   glslang-tools libvulkan-dev mesa-vulkan-drivers vulkan-tools

@@ -108,7 +108,10 @@ int cmd_deform(int argc, char** argv) {
   const Motion motion = load_bvh(motion_path);
   const CorrectiveDeformer d =
       make_corrective_deformer(ch, bones, aliases, checkpoint_distortion_scales(lm.file, model_path));
-  const Clip clip = retarget(motion, d.prepared.character.skeleton, mat4_identity());
+  RetargetOptions ro;  // --alias names joints for the retarget too (JOINT=PART or a known joint name)
+  ro.target_name = in;
+  ro.source_aliases = ro.target_aliases = aliases;
+  const Clip clip = retarget(motion, d.prepared.character.skeleton, mat4_identity(), ro);
   const long nf = static_cast<long>(clip.frames.size());
   GATCORE_CHECK(nf > 0, motion_path, ": no frames");
   long first = 0, last = nf;

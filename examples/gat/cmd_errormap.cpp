@@ -9,6 +9,7 @@
 #include <random>
 #include <string>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/io/bvh.hpp"
@@ -26,11 +27,14 @@ int cmd_errormap(int argc, char** argv) {
   unsigned seed = 1;
   float angle = 0.6f;
   long frame = 0;
+  BoneAliases aliases;
   auto usage = [](std::FILE* f) {
     std::fprintf(f,
                  "usage: gat errormap CHARACTER -o OUT.png [--seed N] [--angle RAD] [--motion M.bvh --frame F]\n"
+                 "                     [--alias JOINT=PART ...]\n"
                  "  renders |Delta Mush - LBS| per vertex for a random pose (joint angles within +-RAD)\n"
-                 "  or for frame F of a BVH motion retargeted by CMU joint names\n");
+                 "  or for frame F of a BVH motion retargeted through the rig conventions (gat info shows\n"
+                 "  the body map; --alias names a joint the map misses, e.g. Bone.012=thigh.l)\n");
   };
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -51,6 +55,8 @@ int cmd_errormap(int argc, char** argv) {
       motion = value();
     } else if (a == "--frame") {
       frame = std::strtol(value().c_str(), nullptr, 10);
+    } else if (a == "--alias") {
+      add_alias(aliases, value());
     } else if (in.empty() && a[0] != '-') {
       in = a;
     } else {
@@ -64,7 +70,10 @@ int cmd_errormap(int argc, char** argv) {
   const PreparedCharacter pc = prepare_character(load_character(in));
   Pose pose;
   if (!motion.empty()) {
-    const Clip clip = retarget(load_bvh(motion), pc.character.skeleton, mat4_identity());
+    RetargetOptions ro;
+    ro.target_name = in;
+    ro.source_aliases = ro.target_aliases = aliases;
+    const Clip clip = retarget(load_bvh(motion), pc.character.skeleton, mat4_identity(), ro);
     GATCORE_CHECK(frame >= 0 && frame < static_cast<long>(clip.frames.size()), motion, ": --frame ", frame,
                   " outside [0, ", clip.frames.size(), ")");
     pose = clip.frames[static_cast<std::size_t>(frame)];

@@ -16,6 +16,8 @@
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
+#include "gatcore/character/features/features.hpp"
+#include "gatcore/character/rig/rig_convention.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
@@ -67,6 +69,8 @@ void print_character(const Character& ch) {
     depth[j] = s.parents[j] >= 0 ? depth[s.parents[j]] + 1 : 0;
     std::printf("  %3d %*s%s%s\n", j, 2 * depth[j], "", s.names[j].c_str(), weighted[j] ? "" : "  (no weights)");
   }
+  // The rig convention and the body map retargeting uses.
+  std::printf("%s", describe_rig(s, map_rig(s, {}, compute_normalisation(ch).bind_to_world)).c_str());
 }
 
 void print_motion(const Motion& m) {
@@ -81,6 +85,7 @@ void print_motion(const Motion& m) {
     depth[j] = s.parents[j] >= 0 ? depth[s.parents[j]] + 1 : 0;
     std::printf("  %3d %*s%s\n", j, 2 * depth[j], "", s.names[j].c_str());
   }
+  std::printf("%s", describe_rig(s, map_rig(s)).c_str());
 }
 
 void print_dataset(const std::string& path, const DatasetDescription& d) {

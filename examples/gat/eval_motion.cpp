@@ -218,7 +218,9 @@ int gat::eval_motion(int argc, char** argv) {
     const std::int64_t n = pc.character.mesh.num_vertices();
     Row chrow{character_label(entry), "all", 0, n, cm, std::vector<Acc>(K)};
     for (std::size_t mi = 0; mi < motions.size(); ++mi) {
-      const Clip clip = retarget(motions[mi], pc.character.skeleton, mat4_identity());
+      RetargetOptions ro;
+      ro.target_name = pc.character.name;
+      const Clip clip = retarget(motions[mi], pc.character.skeleton, mat4_identity(), ro);
       Row row{character_label(entry), motions[mi].name, 0, n, cm, std::vector<Acc>(K)};
       std::vector<std::size_t> frames;
       for (std::size_t f = 0; f < clip.frames.size(); f += std::size_t(stride)) frames.push_back(f);

@@ -222,7 +222,9 @@ std::vector<SampleTask> dataset_tasks(const DatasetDescription& d, const std::ve
     for (int p = 0; p < d.random_poses; ++p) add(random_pose(pc.character.skeleton, pc.rest, limits, rng), p);
     std::int32_t index = d.random_poses;
     for (const Motion& m : motions) {
-      const Clip clip = retarget(m, pc.character.skeleton, mat4_identity());
+      RetargetOptions ro;
+      ro.target_name = pc.character.name;
+      const Clip clip = retarget(m, pc.character.skeleton, mat4_identity(), ro);
       for (std::size_t f = 0; f < clip.frames.size(); f += static_cast<std::size_t>(d.motion_stride))
         add(clip.frames[f], index++);
     }

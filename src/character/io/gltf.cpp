@@ -12,6 +12,7 @@
 #include <tiny_gltf.h>
 
 #include "gatcore/error.hpp"
+#include "src/character/io/gltf_extensions.hpp"
 #include "src/character/io/gltf_util.hpp"
 #include "src/character/rig/weld.hpp"
 
@@ -207,8 +208,7 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
   }
   gltf_util::ResourceGuard guard;
   gltf_util::confine_resources(loader, guard, path, opt.resource_root);
-  const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
-                         : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+  const bool ok = gltf_ext::load_gltf_model(loader, &model, &err, &warn, path, binary);
   if (!ok) {
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
     throw InvalidArgument(detail::cat(path, ": not a readable glTF 2.0 ", binary ? "binary (.glb)" : "(.gltf)",

@@ -10,6 +10,7 @@
 
 #include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
+#include "src/character/io/gltf_extensions.hpp"
 
 namespace gatcore::character::gltf_util {
 
@@ -29,8 +30,7 @@ tinygltf::Model read_model(const std::string& path) {
   ResourceGuard guard;
   confine_resources(gltf, guard, path);
   std::string err, warn;
-  const bool ok = is_glb(path) ? gltf.LoadBinaryFromFile(&model, &err, &warn, path)
-                               : gltf.LoadASCIIFromFile(&model, &err, &warn, path);
+  const bool ok = gltf_ext::load_gltf_model(gltf, &model, &err, &warn, path, is_glb(path));
   GATCORE_CHECK(ok, path, ": cannot read the glTF file: ", err);
   if (model.buffers.empty()) model.buffers.emplace_back();
   return model;

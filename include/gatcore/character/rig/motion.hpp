@@ -1,7 +1,8 @@
 #pragma once
-// Motion capture on a skeleton: retargeting onto a character skeleton by
-// joint names with rest-pose alignment, and random poses within per-joint
-// limits (the papers' "random poses"). Reading BVH files: io/bvh.hpp.
+// Motion capture on a skeleton: retargeting onto a character skeleton
+// through the rig conventions (rig_convention.hpp) or explicit joint pairs,
+// with rest-pose alignment, and random poses within per-joint limits (the
+// papers' "random poses"). Reading BVH files: io/bvh.hpp.
 #include <cstdint>
 #include <random>
 #include <string>
@@ -10,6 +11,7 @@
 
 #include "gatcore/character/rig/pose.hpp"
 #include "gatcore/character/rig/skeleton.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
 
 namespace gatcore::character {
 
@@ -22,7 +24,8 @@ struct Motion {
 };
 
 
-// Source joint name -> target joint name.
+// Source joint name -> target joint name (an explicit pairing; the first
+// pair is the hips and carries the root motion).
 struct RetargetMap {
   std::vector<std::pair<std::string, std::string>> pairs;
   // CMU BVH (Hips, LowerBack, Spine, Spine1, Neck, Head, LeftShoulder, LeftArm,
@@ -31,6 +34,19 @@ struct RetargetMap {
   // Head, Shoulder.L, UpperArm.L, LowerArm.L, Hand.L, UpperLeg.L, LowerLeg.L,
   // Foot.L, ...).
   static RetargetMap cmu_to_humanoid();
+};
+
+// How retarget pairs joints when no explicit map is given: both skeletons
+// go through map_rig (rig_convention.hpp), so any known convention (or an
+// unnamed rig the structural fallback reads) drives any other.
+struct RetargetOptions {
+  std::string target_name = "target skeleton";  // for messages (the character's file)
+  BoneAliases source_aliases;  // normalised joint name -> body part or known joint name (--alias)
+  BoneAliases target_aliases;
+  // A target that is not a humanoid (a quadruped, a creature) is refused,
+  // naming its unmapped limbs; with this set it gets the root motion only
+  // (its limbs stay in the bind pose, by request).
+  bool root_motion_only = false;
 };
 
 // The bind pose expressed in the world frame of the rest pose: skinning it
@@ -42,14 +58,25 @@ Pose world_bind_pose(const Skeleton& s, const Mat4& bind_to_world);
 // source joint's world rotation change from its rest, applied after aligning
 // the target's bind bone direction with the source's rest bone direction
 // (rest-pose alignment: a target A-pose follows a source T-pose); unmapped
-// joints keep their bind rotation relative to their parent. The first mapped
-// pair (the hips) also carries the root translation, scaled by the ratio of
-// rest hip heights above the lowest joint: vertically above the target's
-// ground (its lowest bind joint) as the source hips are above the lowest any
-// source joint goes in the clip; horizontally from the target's rest place,
-// as the source hips moved since the first frame. Needs >= 1 mapped pair.
+// joints (helpers: twist, IK, end bones) keep their bind rotation relative to
+// their parent. Spine and neck chains of different lengths are paired by
+// their relative position along the chain; fingers only when both sides have
+// them. A mapped joint that does not hang under its body parent (older
+// Quaternius feet on the root) keeps its rest offset from that parent
+// instead of stretching. The pelvis carries the root translation, scaled by
+// the ratio of rest hip heights above the lowest joint: vertically above the
+// target's ground (its lowest bind joint) as the source hips are above the
+// lowest any source joint goes in the clip; horizontally from the target's
+// rest place, as the source hips moved since the first frame; it is applied
+// to the topmost ancestor of the target's pelvis (the rig's root).
+// Throws InvalidArgument when either skeleton is not a humanoid (pelvis,
+// thighs, shins, upper arms, forearms mapped), naming the missing parts and
+// the unrecognised joints and suggesting --alias; see RetargetOptions for
+// non-humanoid targets.
 Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_world,
-              const RetargetMap& map = RetargetMap::cmu_to_humanoid());
+              const RetargetOptions& options = {});
+// With an explicit joint pairing (no convention detection). Needs >= 1 mapped pair.
+Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_world, const RetargetMap& map);
 
 // Per-joint rotation limits as XYZ Euler angles (radians) around the rest
 // rotation.
