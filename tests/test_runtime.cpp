@@ -21,6 +21,7 @@
 #include "gatcore/character/procedural.hpp"
 #include "gatcore/character/weight_prediction.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/gatcore.h"
 #include "gatcore/runtime.hpp"
 
 // ---- Counting allocator: every malloc-family call of the process goes
@@ -308,4 +309,69 @@ TEST_CASE("runtime::Deformer reports bad input as errors naming it", "[runtime]"
   CHECK(w.joint == ref.weights.joint);
   CHECK(w.weight == ref.weights.weight);
   CHECK_THROWS_WITH(runtime::WeightPredictor::load(path), Contains("densegats"));
+}
+
+TEST_CASE("the C API gives the C++ runtime's numbers and its errors as codes", "[runtime][c_api]") {
+  const Character ch = humanoid(8);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  const std::string path = corrective_checkpoint("densegats", bones, "1,4", 2);
+  runtime::Deformer ref = runtime::Deformer::load(path);
+  ref.bind(ch.mesh, ch.skeleton);
+
+  // Engine-style arrays: k influences per vertex (zero-padded), TRS rest pose.
+  const Skeleton& s = ch.skeleton;
+  const std::int32_t J = s.num_joints();
+  std::vector<const char*> names;
+  std::vector<float> rest, ibm;
+  for (std::int32_t j = 0; j < J; ++j) {
+    names.push_back(s.names[std::size_t(j)].c_str());
+    const Transform& t = s.rest_local[std::size_t(j)];
+    rest.insert(rest.end(), t.translation.begin(), t.translation.end());
+    rest.insert(rest.end(), t.rotation.begin(), t.rotation.end());
+    rest.insert(rest.end(), t.scale.begin(), t.scale.end());
+    ibm.insert(ibm.end(), s.inverse_bind[std::size_t(j)].begin(), s.inverse_bind[std::size_t(j)].end());
+  }
+  const std::int64_t n = ch.mesh.num_vertices(), k = ch.mesh.weights.max_influences();
+  std::vector<std::int32_t> joints(std::size_t(n * k), 0);
+  std::vector<float> weights(std::size_t(n * k), 0.f);
+  for (std::int64_t v = 0; v < n; ++v)
+    for (std::int64_t e = ch.mesh.weights.ptr[std::size_t(v)], i = 0; e < ch.mesh.weights.ptr[std::size_t(v) + 1];
+         ++e, ++i) {
+      joints[std::size_t(v * k + i)] = ch.mesh.weights.joint[std::size_t(e)];
+      weights[std::size_t(v * k + i)] = ch.mesh.weights.weight[std::size_t(e)];
+    }
+  const gatcore_mesh mesh{n, ch.mesh.positions.data(), ch.mesh.num_triangles(), ch.mesh.triangles.data(), std::int32_t(k),
+                          joints.data(), weights.data()};
+  const gatcore_skeleton sk{J, names.data(), s.parents.data(), rest.data(), ibm.data()};
+  gatcore_deformer* d = nullptr;
+  REQUIRE(gatcore_deformer_load(path.c_str(), GATCORE_DEVICE_CPU, &d) == GATCORE_OK);
+  REQUIRE(gatcore_deformer_bind(d, &mesh, &sk, nullptr, 0) == GATCORE_OK);
+  for (int f = 0; f < 2; ++f) {
+    const std::vector<float> g = globals_of(s, test_pose(s, f));
+    std::vector<float> a(std::size_t(3 * n)), b(a.size()), na(a.size()), nb(a.size());
+    ref.deform(g, a, na);
+    REQUIRE(gatcore_deformer_deform(d, g.data(), J, b.data(), nb.data(), n) == GATCORE_OK);
+    CHECK(a == b);
+    CHECK(na == nb);
+  }
+  CHECK(gatcore_deformer_deform(d, nullptr, J, nullptr, nullptr, n) == GATCORE_ERROR_INVALID_ARGUMENT);
+  CHECK_THAT(std::string(gatcore_last_error()), Contains("must not be NULL"));
+  gatcore_deformer_destroy(d);
+}
+
+// Writes the checkpoints the C test (tests/c_api_test.c) loads: a corrective
+// and a skin-weight model on its tube's bones (hips, spine, chest).
+TEST_CASE("C API test fixture", "[.c_api_fixture]") {
+  const char* model = std::getenv("GATCORE_C_API_MODEL");
+  const char* wmodel = std::getenv("GATCORE_C_API_WEIGHTS");
+  REQUIRE(model);
+  REQUIRE(wmodel);
+  const std::vector<std::string> bones = {"hips", "spine", "chest"};
+  std::filesystem::copy_file(corrective_checkpoint("densegats", bones, "1,4", 2), model,
+                             std::filesystem::copy_options::overwrite_existing);
+  models::ModelConfig wc = models::ModelConfig::defaults("neuroskinning", 9, 3);
+  wc.stage1 = {16}, wc.gc_dims = {8, 8, 8}, wc.global_mlp = {32}, wc.classifier = {32}, wc.gc_pool = {4, 6, 8};
+  auto wm = models::make_model(wc, 1);
+  models::save_checkpoint(wmodel, *wm, models::Normaliser{}, nullptr,
+                          {{"features", "neuroskinning"}, {"skeleton", joined(bones)}});
 }
