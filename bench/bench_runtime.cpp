@@ -17,9 +17,9 @@
 #include <string>
 
 #include "bench/bench_util.hpp"
-#include "gatcore/character/pose.hpp"
-#include "gatcore/character/procedural.hpp"
-#include "gatcore/character/super_skeleton.hpp"
+#include "gatcore/character/rig/pose.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/runtime.hpp"
 

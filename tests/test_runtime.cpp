@@ -16,13 +16,14 @@
 
 #include <link.h>
 
-#include "gatcore/character/corrective.hpp"
-#include "gatcore/character/deform.hpp"
-#include "gatcore/character/procedural.hpp"
-#include "gatcore/character/weight_prediction.hpp"
+#include "gatcore/character/inference/corrective.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/inference/weight_prediction.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/gatcore.h"
 #include "gatcore/runtime.hpp"
+#include "vulkan_test_util.hpp"
 
 // ---- Counting allocator: every malloc-family call of the process goes
 // through these (glibc allows replacing malloc; operator new, std::vector,
@@ -374,4 +375,37 @@ TEST_CASE("C API test fixture", "[.c_api_fixture]") {
   auto wm = models::make_model(wc, 1);
   models::save_checkpoint(wmodel, *wm, models::Normaliser{}, nullptr,
                           {{"features", "neuroskinning"}, {"skeleton", joined(bones)}});
+}
+
+TEST_CASE("runtime::Deformer on Vulkan matches the CPU", "[runtime][vulkan]") {
+  if (!vkt::ready()) return;
+  const Character ch = humanoid(3);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  for (const char* name : {"densegats", "origat"}) {
+    INFO("model " << name);
+    const std::string path = corrective_checkpoint(name, bones, "1,4", 2);
+    runtime::Deformer cpu = runtime::Deformer::load(path);
+    runtime::Deformer vk = runtime::Deformer::load(path, runtime::DeviceChoice::vulkan);
+    CHECK(vk.device() == Device::vulkan);
+    cpu.bind(ch.mesh, ch.skeleton);
+    vk.bind(ch.mesh, ch.skeleton);
+    const std::size_t n3 = std::size_t(3 * cpu.num_vertices());
+    std::vector<float> a(n3), b(n3), la(n3), lb(n3);
+    for (int f = 0; f < 2; ++f) {
+      const std::vector<float> g = globals_of(ch.skeleton, test_pose(ch.skeleton, f));
+      cpu.deform(g, a, {}, la);
+      vk.deform(g, b, {}, lb);
+      CHECK(la == lb);  // LBS and features are on the CPU either way
+      float diff = 0, corr = 0;
+      for (std::size_t i = 0; i < n3; ++i) {
+        diff = std::max(diff, std::abs(a[i] - b[i]));
+        corr = std::max(corr, std::abs(a[i] - la[i]));
+      }
+      CHECK(corr > 0.f);
+      float lo = ch.mesh.positions[1], hi = lo;
+      for (std::size_t i = 1; i < ch.mesh.positions.size(); i += 3)
+        lo = std::min(lo, ch.mesh.positions[i]), hi = std::max(hi, ch.mesh.positions[i]);
+      CHECK(diff < 1e-4f * (hi - lo));  // as test_character_export's deform test: device kernels round differently
+    }
+  }
 }

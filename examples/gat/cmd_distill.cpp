@@ -17,9 +17,9 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
-#include "gatcore/character/character_model.hpp"
-#include "gatcore/character/detail_distortion.hpp"
-#include "gatcore/character/training_data.hpp"
+#include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/distill.hpp"

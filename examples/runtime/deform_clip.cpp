@@ -15,10 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "gatcore/character/bake.hpp"
-#include "gatcore/character/features.hpp"
-#include "gatcore/character/import.hpp"
-#include "gatcore/character/motion.hpp"
+#include "gatcore/character/io/bake.hpp"
+#include "gatcore/character/features/features.hpp"
+#include "gatcore/character/io/import.hpp"
+#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/rig/motion.hpp"
 #include "gatcore/runtime.hpp"
 
 using namespace gatcore;

@@ -37,9 +37,9 @@
 #include <string>
 #include <vector>
 
-#include "gatcore/character/mesh.hpp"
-#include "gatcore/character/skeleton.hpp"
-#include "gatcore/character/super_skeleton.hpp"
+#include "gatcore/character/rig/mesh.hpp"
+#include "gatcore/character/rig/skeleton.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/tensor.hpp"
 
 namespace gatcore::runtime {

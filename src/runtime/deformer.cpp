@@ -10,12 +10,12 @@
 #include <cmath>
 #include <mutex>
 
-#include "gatcore/character/character_model.hpp"
-#include "gatcore/character/dataset.hpp"
-#include "gatcore/character/deform.hpp"
-#include "gatcore/character/detail_distortion.hpp"
-#include "gatcore/character/features.hpp"
-#include "gatcore/character/parallel.hpp"
+#include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/features/features.hpp"
+#include "gatcore/character/rig/parallel.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/deploy.hpp"

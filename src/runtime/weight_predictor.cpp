@@ -1,8 +1,8 @@
 // runtime::WeightPredictor: a skin-weight checkpoint applied to a new
 // character (predict_skin_weights, as gat predict-weights), behind the
 // runtime's load / predict interface.
-#include "gatcore/character/character_model.hpp"
-#include "gatcore/character/weight_prediction.hpp"
+#include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/inference/weight_prediction.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/runtime.hpp"
