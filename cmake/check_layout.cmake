@@ -15,6 +15,8 @@
 #   eval       metrics, skin-weight evaluation
 #   viz        software rasteriser, plots, loss curves
 #   inference  a trained model applied to a character: per-frame correctives, predicted weights
+#   runtime    the engine-facing API above them (include/gatcore/runtime.hpp, gatcore.h, src/runtime/):
+#              models, rig, deform, features, inference; never datasets, importers, training, pictures
 # The core (include/gatcore/*.hpp, models/, nn/, src/*.cpp, ops/, vulkan/) never
 # includes the character pipeline.
 cmake_minimum_required(VERSION 3.22)
@@ -26,8 +28,9 @@ set(_allowed_data rig deform io features data)
 set(_allowed_eval rig deform features data eval)
 set(_allowed_viz rig viz)
 set(_allowed_inference rig deform features inference)
+set(_allowed_runtime rig deform features inference runtime)
 set(_allowed_core "")
-set(_layers rig deform io features data eval viz inference)
+set(_layers rig deform io features data eval viz inference runtime)
 
 if(NOT GATCORE_ROOT)
   message(FATAL_ERROR "check_layout: pass -DGATCORE_ROOT=<source dir>")
@@ -43,6 +46,10 @@ function(_layer_of path out)
     set(_l "${CMAKE_MATCH_2}")
   elseif(path MATCHES "^src/character/([^/]+)/")
     set(_l "${CMAKE_MATCH_1}")
+  elseif(path MATCHES "^(include/)?gatcore/(runtime\\.hpp|gatcore\\.h)$")
+    set(_l runtime)
+  elseif(path MATCHES "^src/runtime/")
+    set(_l runtime)
   elseif(path MATCHES "^(include/)?gatcore/character/")
     set(_l loose)
   elseif(path MATCHES "^src/character/")

@@ -53,6 +53,27 @@ void batchnorm_eval_forward(const Tensor& x, const Tensor& gamma, const Tensor& 
       x, gamma, beta, running_mean, running_var, eps, y);
 }
 
+void batchnorm_affine_forward(const Tensor& x, const Tensor& mean, const Tensor& scale, const Tensor& shift,
+                              const Tensor& y) {
+  (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_affine_forward : isa_baseline::batchnorm_affine_forward)(x, mean, scale,
+                                                                                                     shift, y);
+}
+
+void batchnorm_eval_scale(const Tensor& gamma, const Tensor& running_var, float eps, const Tensor& scale) {
+  check_cpu_f32(running_var, "batchnorm_eval_scale: running_var");
+  const std::int64_t C = running_var.cols();
+  GATCORE_CHECK(running_var.rows() == 1 && scale.rows() == 1 && scale.cols() == C &&
+                    (!gamma.defined() || (gamma.rows() == 1 && gamma.cols() == C)),
+                "batchnorm_eval_scale: gamma, running_var and scale must be [1, ", C, "]");
+  for (std::int64_t c = 0; c < C; ++c) {
+    const double v = static_cast<double>(running_var.at(0, c)) + static_cast<double>(eps);
+    GATCORE_CHECK(v > 0.0 && std::isfinite(v), "batchnorm_eval_scale: running_var + eps must be > 0, got ",
+                  running_var.at(0, c), " + ", eps, " at column ", c);
+    const double g = gamma.defined() ? static_cast<double>(gamma.at(0, c)) : 1.0;
+    scale.at(0, c) = static_cast<float>(g / std::sqrt(v));
+  }
+}
+
 void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
                               const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
                               const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across) {

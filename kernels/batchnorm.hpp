@@ -20,6 +20,14 @@ void batchnorm_train_forward(const Tensor& x, const Tensor& gamma, const Tensor&
 // Evaluation with running statistics.
 void batchnorm_eval_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, const Tensor& running_mean,
                             const Tensor& running_var, float eps, const Tensor& y);
+// Evaluation with the per-column affine map prepared once (deploy time, no
+// allocation per call): y = (x - mean) * scale + shift, where
+// scale = gamma / sqrt(running_var + eps) computed in double and rounded to
+// float (batchnorm_eval_scale). Gives exactly batchnorm_eval_forward's values.
+void batchnorm_affine_forward(const Tensor& x, const Tensor& mean, const Tensor& scale, const Tensor& shift,
+                              const Tensor& y);
+// The eval forward's per-column scale, written into `scale` [1, C].
+void batchnorm_eval_scale(const Tensor& gamma, const Tensor& running_var, float eps, const Tensor& scale);
 // Backward of the training forward; accumulates d_x, d_gamma, d_beta (each may be undefined).
 // With `across`, Σdy and Σdy·x̂ (and the row count) are summed over the
 // processes for d_x; d_gamma / d_beta stay this process's share (they are

@@ -524,6 +524,29 @@ TEST_CASE("batchnorm: the reference backward matches finite differences", "[batc
   }
 }
 
+TEST_CASE("batchnorm_affine_forward with batchnorm_eval_scale equals the eval forward bitwise", "[batchnorm]") {
+  // The deploy path (models/deploy.hpp) prepares the scale once and must
+  // reproduce batchnorm_eval_forward exactly (gat deform's numbers).
+  Rng rng(54);
+  const float eps = 1e-5f;
+  for (const Shape& s : kShapes)
+    for (int strided = 0; strided < 2; ++strided) {
+      INFO("shape " << s.r << "x" << s.c << " strided " << strided);
+      Tensor x = random(rng, s.r, s.c, strided, -3.0f, 3.0f);
+      Tensor gamma = random(rng, 1, s.c, false, 0.5f, 1.5f), beta = random(rng, 1, s.c, false);
+      Tensor rm = random(rng, 1, s.c, false), rv = random(rng, 1, s.c, false, 0.2f, 2.0f);
+      Tensor ref = make(s.r, s.c, false), got = make(s.r, s.c, strided);
+      cpu::batchnorm_eval_forward(x, gamma, beta, rm, rv, eps, ref);
+      Tensor scale = Tensor::empty(1, s.c);
+      cpu::batchnorm_eval_scale(gamma, rv, eps, scale);
+      cpu::batchnorm_affine_forward(x, rm, scale, beta, got);
+      for (std::int64_t r = 0; r < s.r; ++r)
+        for (std::int64_t c = 0; c < s.c; ++c) REQUIRE(got.at(r, c) == ref.at(r, c));
+    }
+  Tensor bad = Tensor::full(1, 4, -1.0f), scale = Tensor::empty(1, 4);
+  REQUIRE_THROWS_WITH(cpu::batchnorm_eval_scale(Tensor(), bad, 1e-5f, scale), Catch::Contains("running_var + eps"));
+}
+
 TEST_CASE("batchnorm: eval forward / backward, no affine", "[batchnorm]") {
   Rng rng(53);
   const float eps = 1e-3f;

@@ -22,5 +22,6 @@ int cmd_errormap(int argc, char** argv);
 int cmd_dataset(int argc, char** argv);
 int cmd_predict_weights(int argc, char** argv);
 int cmd_deform(int argc, char** argv);
+int cmd_distill(int argc, char** argv);
 
 }  // namespace gat

@@ -18,6 +18,7 @@ constexpr gat::Command kCommands[] = {
     {"dataset", gat::cmd_dataset, "build a dataset description (characters, motions, split, reference deformer)"},
     {"predict-weights", gat::cmd_predict_weights, "skin weights for a character from a NeuroSkinning-family model"},
     {"deform", gat::cmd_deform, "a motion on a character with DenseGATs corrections, baked as morph targets / .pc2"},
+    {"distill", gat::cmd_distill, "train a compact deploy model (e.g. origat) to imitate a large displacement model"},
 };
 
 int usage(int rc) {

@@ -57,9 +57,16 @@ void blend_matrix(const SkinWeights& W, std::span<const Mat4> skinning, std::int
 }  // namespace
 
 std::vector<float> linear_blend_skinning(const Mesh& mesh, std::span<const Mat4> skinning) {
+  std::vector<float> out(static_cast<std::size_t>(3 * mesh.num_vertices()));
+  linear_blend_skinning(mesh, skinning, out);
+  return out;
+}
+
+void linear_blend_skinning(const Mesh& mesh, std::span<const Mat4> skinning, std::span<float> out) {
   check_skinning(mesh, skinning);
   const std::int64_t n = mesh.num_vertices();
-  std::vector<float> out(static_cast<std::size_t>(3 * n));
+  GATCORE_CHECK(static_cast<std::int64_t>(out.size()) == 3 * n, "linear_blend_skinning: output of ", out.size(),
+                " floats for ", n, " vertices");
   const float* P = mesh.positions.data();
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
@@ -68,15 +75,20 @@ std::vector<float> linear_blend_skinning(const Mesh& mesh, std::span<const Mat4>
     const float x = P[3 * v], y = P[3 * v + 1], z = P[3 * v + 2];
     for (int r = 0; r < 3; ++r) out[3 * v + r] = m[r] * x + m[3 + r] * y + m[6 + r] * z + m[9 + r];
   }
-  return out;
 }
 
 std::vector<float> skin_vectors(const Mesh& mesh, std::span<const Mat4> skinning, std::span<const float> vectors) {
+  std::vector<float> out(static_cast<std::size_t>(3 * mesh.num_vertices()));
+  skin_vectors(mesh, skinning, vectors, out);
+  return out;
+}
+
+void skin_vectors(const Mesh& mesh, std::span<const Mat4> skinning, std::span<const float> vectors,
+                  std::span<float> out) {
   check_skinning(mesh, skinning);
   const std::int64_t n = mesh.num_vertices();
-  GATCORE_CHECK(static_cast<std::int64_t>(vectors.size()) == 3 * n, "skin_vectors: ", vectors.size() / 3,
-                " vectors for ", n, " vertices");
-  std::vector<float> out(static_cast<std::size_t>(3 * n));
+  GATCORE_CHECK(static_cast<std::int64_t>(vectors.size()) == 3 * n && out.size() == vectors.size(), "skin_vectors: ",
+                vectors.size() / 3, " vectors and ", out.size() / 3, " outputs for ", n, " vertices");
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float m[12];
@@ -84,7 +96,6 @@ std::vector<float> skin_vectors(const Mesh& mesh, std::span<const Mat4> skinning
     const float x = vectors[3 * v], y = vectors[3 * v + 1], z = vectors[3 * v + 2];
     for (int r = 0; r < 3; ++r) out[3 * v + r] = m[r] * x + m[3 + r] * y + m[6 + r] * z;
   }
-  return out;
 }
 
 std::vector<float> dual_quaternion_skinning(const Mesh& mesh, std::span<const Mat4> skinning) {
@@ -128,10 +139,20 @@ std::vector<float> dual_quaternion_skinning(const Mesh& mesh, std::span<const Ma
 }
 
 std::vector<float> vertex_normals(std::span<const float> positions, std::span<const std::int32_t> triangles) {
+  std::vector<float> out(positions.size());
+  std::vector<double> acc(positions.size());
+  vertex_normals(positions, triangles, out, acc);
+  return out;
+}
+
+void vertex_normals(std::span<const float> positions, std::span<const std::int32_t> triangles, std::span<float> out,
+                    std::span<double> acc) {
   GATCORE_CHECK(positions.size() % 3 == 0 && triangles.size() % 3 == 0,
                 "vertex_normals: positions and triangles must be multiples of 3");
+  GATCORE_CHECK(out.size() == positions.size() && acc.size() == positions.size(), "vertex_normals: output (",
+                out.size(), ") and scratch (", acc.size(), ") must match the positions (", positions.size(), ")");
   const std::int64_t n = static_cast<std::int64_t>(positions.size() / 3);
-  std::vector<double> acc(static_cast<std::size_t>(3 * n), 0.0);
+  std::fill(acc.begin(), acc.end(), 0.0);
   for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
     const std::int32_t a = triangles[t], b = triangles[t + 1], c = triangles[t + 2];
     GATCORE_CHECK(a >= 0 && b >= 0 && c >= 0 && a < n && b < n && c < n, "vertex_normals: triangle ", t / 3,
@@ -150,22 +171,31 @@ std::vector<float> vertex_normals(std::span<const float> positions, std::span<co
       acc[3 * v + 2] += nz;
     }
   }
-  std::vector<float> out(static_cast<std::size_t>(3 * n), 0.0f);
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     const double l = std::sqrt(acc[3 * v] * acc[3 * v] + acc[3 * v + 1] * acc[3 * v + 1] + acc[3 * v + 2] * acc[3 * v + 2]);
-    if (l > 0.0)
-      for (int c = 0; c < 3; ++c) out[3 * v + c] = static_cast<float>(acc[3 * v + c] / l);
+    for (int c = 0; c < 3; ++c) out[3 * v + c] = l > 0.0 ? static_cast<float>(acc[3 * v + c] / l) : 0.0f;
   }
-  return out;
 }
 
 std::vector<float> laplacian_smooth(const DeltaMush& dm, std::span<const float> x0, int iterations, float step) {
+  std::vector<float> out(x0.size()), scratch(x0.size());
+  laplacian_smooth(dm, x0, iterations, step, out, scratch);
+  return out;
+}
+
+void laplacian_smooth(const DeltaMush& dm, std::span<const float> x0, int iterations, float step, std::span<float> out,
+                      std::span<float> scratch) {
   const std::int64_t n = static_cast<std::int64_t>(dm.adj_ptr.size()) - 1;
   GATCORE_CHECK(static_cast<std::int64_t>(x0.size()) == 3 * n, "laplacian_smooth: ", x0.size() / 3,
                 " vertices, the adjacency has ", n);
+  GATCORE_CHECK(out.size() == x0.size() && scratch.size() == x0.size(), "laplacian_smooth: output (", out.size(),
+                ") and scratch (", scratch.size(), ") must match the input (", x0.size(), ")");
   GATCORE_CHECK(iterations >= 0, "laplacian_smooth: iterations must be >= 0, got ", iterations);
-  std::vector<float> a(x0.begin(), x0.end()), b(a.size());
+  if (out.data() != x0.data()) std::copy(x0.begin(), x0.end(), out.begin());
+  // Ping-pong between out and scratch; the result is copied back if it ends in scratch.
+  float* a = out.data();
+  float* b = scratch.data();
   for (int it = 0; it < iterations; ++it) {
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
     for (std::int64_t v = 0; v < n; ++v) {
@@ -180,9 +210,9 @@ std::vector<float> laplacian_smooth(const DeltaMush& dm, std::span<const float> 
       const float inv = 1.0f / static_cast<float>(k1 - k0);
       for (int c = 0; c < 3; ++c) b[3 * v + c] = a[3 * v + c] + step * (m[c] * inv - a[3 * v + c]);
     }
-    a.swap(b);
+    std::swap(a, b);
   }
-  return a;
+  if (a != out.data()) std::copy(a, a + out.size(), out.begin());
 }
 
 namespace {

@@ -1,12 +1,13 @@
 #include "gatcore/character/deform/detail_distortion.hpp"
 
+#include <algorithm>
 #include <sstream>
 
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
 
-void check_distortion_scales(std::span<const int> scales, const std::string& what) {
+void check_distortion_scales(std::span<const int> scales, std::string_view what) {
   for (std::size_t i = 0; i < scales.size(); ++i) {
     GATCORE_CHECK(scales[i] >= 1 && scales[i] <= 1000, what, ": distortion scale ", scales[i],
                   " is outside [1, 1000] smoothing steps");
@@ -47,19 +48,30 @@ std::string format_distortion_scales(std::span<const int> scales) {
 
 std::vector<std::vector<float>> laplacian_details(const DeltaMush& dm, std::span<const float> x,
                                                   std::span<const int> scales) {
-  check_distortion_scales(scales, "laplacian_details");
-  std::vector<std::vector<float>> out;
-  // Smooth incrementally: S^k2 = S^(k2 - k1) S^k1.
-  std::vector<float> s(x.begin(), x.end());
-  int done = 0;
-  for (int k : scales) {
-    s = laplacian_smooth(dm, s, k - done, 0.5f);
-    done = k;
-    std::vector<float> d(x.size());
-    for (std::size_t i = 0; i < d.size(); ++i) d[i] = x[i] - s[i];
-    out.push_back(std::move(d));
-  }
+  std::vector<std::vector<float>> out(scales.size(), std::vector<float>(x.size()));
+  std::vector<std::span<float>> spans(out.begin(), out.end());
+  std::vector<float> smoothed(x.size()), scratch(x.size());
+  laplacian_details(dm, x, scales, spans, smoothed, scratch);
   return out;
+}
+
+void laplacian_details(const DeltaMush& dm, std::span<const float> x, std::span<const int> scales,
+                       std::span<const std::span<float>> out, std::span<float> s, std::span<float> scratch) {
+  check_distortion_scales(scales, "laplacian_details");
+  GATCORE_CHECK(out.size() == scales.size(), "laplacian_details: ", out.size(), " outputs for ", scales.size(),
+                " scales");
+  for (const std::span<float>& o : out)
+    GATCORE_CHECK(o.size() == x.size(), "laplacian_details: an output of ", o.size(), " floats for ", x.size());
+  GATCORE_CHECK(s.size() == x.size(), "laplacian_details: smoothing buffer of ", s.size(), " floats for ", x.size());
+  // Smooth incrementally: S^k2 = S^(k2 - k1) S^k1.
+  std::copy(x.begin(), x.end(), s.begin());
+  int done = 0;
+  for (std::size_t i = 0; i < scales.size(); ++i) {
+    laplacian_smooth(dm, s, scales[i] - done, 0.5f, s, scratch);
+    done = scales[i];
+    const std::span<float>& d = out[i];
+    for (std::size_t e = 0; e < d.size(); ++e) d[e] = x[e] - s[e];
+  }
 }
 
 }  // namespace gatcore::character

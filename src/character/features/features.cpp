@@ -76,13 +76,19 @@ Vec3 apply_normalisation(const NormalisationStats& s, const Vec3& p) {
 
 std::vector<float> apply_normalisation(const NormalisationStats& s, std::span<const float> positions) {
   std::vector<float> out(positions.size());
+  apply_normalisation(s, positions, out);
+  return out;
+}
+
+void apply_normalisation(const NormalisationStats& s, std::span<const float> positions, std::span<float> out) {
+  GATCORE_CHECK(out.size() == positions.size(), "apply_normalisation: output of ", out.size(), " floats for ",
+                positions.size());
   const std::int64_t n = static_cast<std::int64_t>(positions.size() / 3);
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     const Vec3 r = apply_normalisation(s, {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]});
     for (int c = 0; c < 3; ++c) out[3 * v + c] = r[c];
   }
-  return out;
 }
 
 std::vector<float> normalise_bind_positions(const NormalisationStats& s, std::span<const float> positions) {
@@ -112,9 +118,17 @@ std::vector<Vec3> joint_positions(std::span<const Mat4> globals) {
 }
 
 Tensor densegats_features(std::span<const float> pos, std::span<const float> nrm, std::span<const Vec3> joints) {
+  Tensor x = Tensor::empty(static_cast<std::int64_t>(pos.size() / 3), 6 + static_cast<std::int64_t>(joints.size()));
+  densegats_features(pos, nrm, joints, x);
+  return x;
+}
+
+void densegats_features(std::span<const float> pos, std::span<const float> nrm, std::span<const Vec3> joints,
+                        const Tensor& x) {
   check_vertex_arrays(pos, nrm, "densegats_features");
   const std::int64_t n = static_cast<std::int64_t>(pos.size() / 3), J = static_cast<std::int64_t>(joints.size());
-  Tensor x = Tensor::empty(n, 6 + J);
+  check_cpu_f32(x, "densegats_features: out");
+  check_shape(x, n, 6 + J, "densegats_features: out");
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float* r = x.row(v);
@@ -128,7 +142,6 @@ Tensor densegats_features(std::span<const float> pos, std::span<const float> nrm
       r[6 + j] = std::sqrt(d2);
     }
   }
-  return x;
 }
 
 Tensor neuroskinning_features(std::span<const float> pos, std::span<const float> nrm, std::span<const Vec3> joints,

@@ -13,6 +13,7 @@
 // own folds; these columns give it that information (docs/RESULTS.md).
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "gatcore/character/deform/deform.hpp"
@@ -21,7 +22,7 @@ namespace gatcore::character {
 
 // Scales (smoothing steps) must be in [1, 1000] and strictly increasing;
 // throws InvalidArgument naming `what` and the value.
-void check_distortion_scales(std::span<const int> scales, const std::string& what);
+void check_distortion_scales(std::span<const int> scales, std::string_view what);
 // "1,4,16" <-> {1, 4, 16}; "" and "none" are the empty list.
 std::vector<int> parse_distortion_scales(const std::string& text, const std::string& what);
 std::string format_distortion_scales(std::span<const int> scales);
@@ -29,5 +30,9 @@ std::string format_distortion_scales(std::span<const int> scales);
 // x - S^k(x) for each k in `scales` (checked), over dm's one-ring: [scales][3 n].
 std::vector<std::vector<float>> laplacian_details(const DeltaMush& dm, std::span<const float> x,
                                                   std::span<const int> scales);
+// The same into `out` (one [3 n] span per scale) with two [3 n] scratch
+// buffers (no allocation: the runtime's per-frame path).
+void laplacian_details(const DeltaMush& dm, std::span<const float> x, std::span<const int> scales,
+                       std::span<const std::span<float>> out, std::span<float> smoothed, std::span<float> scratch);
 
 }  // namespace gatcore::character

@@ -27,6 +27,7 @@ NormalisationStats compute_normalisation(const Character& c);
 // World positions -> normalised.
 Vec3 apply_normalisation(const NormalisationStats& s, const Vec3& p);
 std::vector<float> apply_normalisation(const NormalisationStats& s, std::span<const float> positions);
+void apply_normalisation(const NormalisationStats& s, std::span<const float> positions, std::span<float> out);
 // Bind-space positions -> normalised (bind_to_world, then the above).
 std::vector<float> normalise_bind_positions(const NormalisationStats& s, std::span<const float> positions);
 // Bind-pose joint positions, normalised.
@@ -35,6 +36,9 @@ std::vector<Vec3> normalised_bind_joints(const NormalisationStats& s, const Skel
 // DenseGATs: [posed position (3), posed normal (3), distance to each joint (J)].
 Tensor densegats_features(std::span<const float> posed_positions, std::span<const float> posed_normals,
                           std::span<const Vec3> joint_positions);
+// The same into `out` ([n, 6 + J] CPU tensor; no allocation).
+void densegats_features(std::span<const float> posed_positions, std::span<const float> posed_normals,
+                        std::span<const Vec3> joint_positions, const Tensor& out);
 // NeuroSkinning: [rest position (3), rest normal (3), shortest distance to
 // each bone segment (J)]. Bone j spans from joint j to each of its children
 // (the minimum over children); a leaf joint's bone is its point.

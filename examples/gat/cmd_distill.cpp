@@ -1,0 +1,181 @@
+// `gat distill TEACHER.gcm [--model origat] [--out student.gcm] ...`: trains
+// a compact displacement model to imitate a large one (models/distill.hpp)
+// on the teacher's dataset: each epoch's training samples (the same random
+// poses and vertex windows `gat train --data` uses) get the teacher's
+// predictions as targets. The student checkpoint carries the teacher's
+// bones, distortion scales and dataset, so `gat deform`, `gat eval` and the
+// runtime (runtime.hpp, gatcore.h) use it like any trained checkpoint.
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/data/training_data.hpp"
+#include "gatcore/error.hpp"
+#include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/distill.hpp"
+#include "gatcore/models/train.hpp"
+
+using namespace gatcore;
+using namespace gatcore::models;
+
+namespace gat {
+
+namespace {
+
+void usage(std::FILE* f) {
+  std::fprintf(f,
+               "usage: gat distill TEACHER.gcm [--model NAME] [--out FILE] [--data DATASET] [--epochs N]\n"
+               "                   [--minutes M] [--hard A] [--samples N] [--lr LR] [--seed S] [--threads T]\n"
+               "  Trains a compact displacement model to imitate TEACHER (a densegats-family checkpoint\n"
+               "  trained with gat train --data): its targets are the teacher's predictions on each\n"
+               "  training sample. The result deforms like any checkpoint (gat deform, the runtime).\n"
+               "  --model NAME   the student, with its paper defaults (default origat; any displacement\n"
+               "                 model: densegats, densegats-noself, densegats-nodense, origat)\n"
+               "  --out FILE     the student checkpoint (default student.gcm), written after every epoch\n"
+               "  --data DATASET the dataset (default: the one TEACHER was trained on, metadata data_path)\n"
+               "  --epochs N     epochs (default 10); --minutes M: no new epoch after M minutes\n"
+               "  --hard A       weight of the ground truth in the targets, in [0, 1] (default 0: teacher only)\n"
+               "  --samples N    poses per character and epoch (default: all of the dataset's)\n"
+               "  --lr LR        initial learning rate (default 1e-3); --seed S (default 0); --threads T\n");
+}
+
+double number(const std::string& flag, const std::string& v, double lo, double hi) {
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  GATCORE_CHECK(!v.empty() && !*end && std::isfinite(x) && x >= lo && x <= hi, flag, " expects a number in [", lo, ", ",
+                hi, "], got '", v, "'");
+  return x;
+}
+
+}  // namespace
+
+int cmd_distill(int argc, char** argv) {
+  std::string teacher_path, student_name = "origat", out = "student.gcm", data;
+  long epochs = 10, seed = 0, threads = 0, samples = 0;
+  double minutes = 0, hard = 0, lr = 1e-3;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw InvalidArgument(a + " expects a value");
+      return argv[++i];
+    };
+    if (a == "-h" || a == "--help") {
+      usage(stdout);
+      return 0;
+    } else if (a == "--model") {
+      student_name = value();
+    } else if (a == "--out") {
+      out = value();
+    } else if (a == "--data") {
+      data = value();
+    } else if (a == "--epochs") {
+      epochs = parse_int(a, value(), 1, 10000000);
+    } else if (a == "--minutes") {
+      minutes = number(a, value(), 1e-6, 1e9);
+    } else if (a == "--hard") {
+      hard = number(a, value(), 0, 1);
+    } else if (a == "--samples") {
+      samples = parse_int(a, value(), 1, 1000000);
+    } else if (a == "--lr") {
+      lr = number(a, value(), 1e-12, 10);
+    } else if (a == "--seed") {
+      seed = parse_int(a, value(), 0, 2147483647L);
+    } else if (a == "--threads") {
+      threads = parse_int(a, value(), 1, 1024);
+    } else if (!a.empty() && a[0] != '-' && teacher_path.empty()) {
+      teacher_path = a;
+    } else {
+      throw InvalidArgument("unknown or extra argument '" + a + "'");
+    }
+  }
+  if (teacher_path.empty()) {
+    usage(stderr);
+    return 2;
+  }
+  if (threads > 0) omp_set_num_threads(int(threads));
+  const std::filesystem::path out_dir = std::filesystem::path(out).parent_path();
+  GATCORE_CHECK(out_dir.empty() || std::filesystem::is_directory(out_dir), out, ": the directory ", out_dir.string(),
+                " does not exist");
+
+  LoadedModel teacher = load_checkpoint(teacher_path);
+  const std::vector<std::string> bones =
+      character::character_model_bones(teacher, teacher_path, Task::displacement);  // checks the kind
+  const auto& md = teacher.file.metadata;
+  if (data.empty()) {
+    GATCORE_CHECK(md.count("data_path"), teacher_path, ": no data_path in the metadata; give --data");
+    data = md.at("data_path");
+  }
+  const character::TrainingData td = character::load_training_data(data);
+  GATCORE_CHECK(character::joined_bone_names(td.super) == md.at("skeleton"), data,
+                ": its super skeleton differs from the one ", teacher_path, " was trained on");
+  GATCORE_CHECK(td.feature_dim(Task::displacement) == teacher.model->config().in_dim, data, ": ",
+                td.feature_dim(Task::displacement), " features per vertex, ", teacher_path, " takes ",
+                teacher.model->config().in_dim, " (different distortion scales?)");
+  teacher.model->fold_batch_norm();  // inference only: the same predictions, less work
+
+  ModelConfig cfg = ModelConfig::defaults(student_name, td.feature_dim(Task::displacement), 3);
+  GATCORE_CHECK(cfg.task == Task::displacement, "--model ", student_name, " predicts skin weights; the student must ",
+                "predict displacements (densegats, densegats-noself, densegats-nodense, origat)");
+  cfg.loss = teacher.model->config().loss;
+  auto student = make_model(cfg, std::uint64_t(seed));
+
+  const auto part = [&](character::DatasetPart p, int epoch) {
+    std::vector<Sample> s = character::training_samples(td, Task::displacement, p, epoch, 1, int(samples));
+    distill_targets(*teacher.model, teacher.norm, s, float(hard));
+    return s;
+  };
+  std::vector<Sample> train = part(character::DatasetPart::train, 0);
+  const std::vector<Sample> val = part(character::DatasetPart::validation, 0);
+  GATCORE_CHECK(!train.empty(), data, ": no training samples");
+  const Normaliser norm = Normaliser::fit(train, true);
+  TrainOptions opt = TrainOptions::defaults_for(cfg);
+  opt.seed = std::uint64_t(seed);
+  opt.lr = float(lr);
+  Trainer trainer(*student, opt, norm);
+
+  std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
+                                           {"features", "densegats"},
+                                           {"data", "dataset"},
+                                           {"data_path", std::filesystem::absolute(data).string()},
+                                           {"data_hash", td.hash},
+                                           {"skeleton", md.at("skeleton")},
+                                           {"distortion_scales", character::format_distortion_scales(
+                                                                     td.description.distortion_scales)},
+                                           {"distilled_from", std::filesystem::absolute(teacher_path).string()},
+                                           {"distill_hard", std::to_string(hard)}};
+  std::printf("gat distill: %s (%lld parameters) imitating %s (%s, %lld parameters) on %s: %zu training / %zu "
+              "validation samples, ground-truth weight %g, %d threads\n",
+              cfg.name.c_str(), static_cast<long long>(student->registry().num_parameters()), teacher_path.c_str(),
+              teacher.model->config().name.c_str(),
+              static_cast<long long>(teacher.model->registry().num_parameters()), data.c_str(), train.size(),
+              val.size(), hard, omp_get_max_threads());
+  const auto t0 = std::chrono::steady_clock::now();
+  while (trainer.epoch() < epochs) {
+    if (trainer.epoch() > 0) train = part(character::DatasetPart::train, trainer.epoch());
+    const EpochStats st = trainer.run_epoch(train, val);
+    save_checkpoint(out, *student, norm, &trainer, extra);
+    std::printf("epoch %d/%ld  train loss %.6f  val loss (vs teacher) %.6f  lr %.3g  (%.1f s)  -> %s\n", st.epoch,
+                epochs, st.train_loss, st.val_loss, st.lr, st.seconds, out.c_str());
+    std::fflush(stdout);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (minutes > 0 && s >= minutes * 60.0) {
+      std::printf("time budget of %g minutes reached after epoch %d; student written to %s\n", minutes, st.epoch,
+                  out.c_str());
+      return 0;
+    }
+  }
+  std::printf("distilled %ld epochs; student written to %s\n", epochs, out.c_str());
+  return 0;
+}
+
+}  // namespace gat

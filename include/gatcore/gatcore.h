@@ -1,0 +1,134 @@
+/* gatcore C API: the runtime (gatcore/runtime.hpp) for engines and tools
+ * that speak C: Unity native plugins, Godot GDExtension, Unreal modules,
+ * Python ctypes / cffi.
+ *
+ *   gatcore_deformer* d = NULL;
+ *   if (gatcore_deformer_load("corrective.gcm", GATCORE_DEVICE_CPU, &d) != GATCORE_OK)
+ *     fprintf(stderr, "%s\n", gatcore_last_error());
+ *   gatcore_deformer_bind(d, &mesh, &skeleton, NULL, 0);            once per character
+ *   gatcore_deformer_deform(d, joint_globals, J, positions, NULL, n); every frame
+ *   gatcore_deformer_destroy(d);
+ *
+ * Conventions
+ * - Every function returns a gatcore_status; GATCORE_OK is 0. On an error the
+ *   calling thread's gatcore_last_error() says what and where (file, argument,
+ *   value); no exception ever crosses this boundary. Out-parameters are
+ *   written only on success.
+ * - Handles are opaque. A deformer holds one bound character and its
+ *   workspace: use one per character; different deformers may run on
+ *   different threads at once (they share the loaded model read-only when
+ *   made with gatcore_deformer_share). One deformer must not be used from two
+ *   threads at the same time.
+ * - Matrices are 4x4 column-major floats (m[col * 4 + row]), as glTF, Unity's
+ *   Matrix4x4 memory layout, Godot's Transform3D basis columns + origin and
+ *   Unreal's FMatrix (row-vector convention, same memory order) store them.
+ * - Positions are in the skinned mesh's space (bind space); joint_globals are
+ *   joint-to-that-space transforms of the current pose. deform() writes the
+ *   linear-blend-skinned positions plus the model's correction.
+ * - After bind, deform() allocates nothing (CPU device).
+ */
+#ifndef GATCORE_H
+#define GATCORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define GATCORE_C_API_VERSION 1
+
+typedef enum gatcore_status {
+  GATCORE_OK = 0,
+  GATCORE_ERROR_INVALID_ARGUMENT = 1, /* a NULL / size / value the call cannot use */
+  GATCORE_ERROR_IO = 2,               /* a file missing, unreadable or corrupt */
+  GATCORE_ERROR_MODEL = 3,            /* the checkpoint is the wrong kind of model for the call */
+  GATCORE_ERROR_STATE = 4,            /* e.g. deform before bind */
+  GATCORE_ERROR_DEVICE = 5,           /* the requested device is not available */
+  GATCORE_ERROR_OUT_OF_MEMORY = 6,
+  GATCORE_ERROR_INTERNAL = 7          /* anything else; the message says what */
+} gatcore_status;
+
+typedef enum gatcore_device {
+  GATCORE_DEVICE_CPU = 0,
+  GATCORE_DEVICE_AUTO = 1,  /* the Vulkan GPU when there is one, else the CPU */
+  GATCORE_DEVICE_VULKAN = 2 /* a Vulkan GPU, or GATCORE_ERROR_DEVICE */
+} gatcore_device;
+
+/* The calling thread's last error message ("" if none). Valid until the
+ * thread's next gatcore call. */
+const char* gatcore_last_error(void);
+/* "GATCORE_OK", "GATCORE_ERROR_IO", ... */
+const char* gatcore_status_name(gatcore_status s);
+/* Library version, e.g. "0.1.0". */
+const char* gatcore_version(void);
+/* OpenMP threads the calling thread's gatcore calls use (0: the default). */
+gatcore_status gatcore_set_num_threads(int32_t threads);
+
+/* A skeleton: joints ordered parents first. */
+typedef struct gatcore_skeleton {
+  int32_t num_joints;
+  const char* const* names; /* [num_joints] joint names, matched to the model's bones */
+  const int32_t* parents;   /* [num_joints] parent index (< j), -1 for a root */
+  /* [num_joints * 10] rest pose, relative to the parent: translation x y z,
+   * rotation quaternion x y z w, scale x y z */
+  const float* rest_local;
+  const float* inverse_bind; /* [num_joints * 16] inverse bind matrices */
+} gatcore_skeleton;
+
+/* A skinned mesh with a fixed number of influences per vertex (as engines
+ * store them). Zero weights are ignored, a joint listed twice for a vertex
+ * has its weights summed, and each vertex's weights are renormalised to 1. */
+typedef struct gatcore_mesh {
+  int64_t num_vertices;
+  const float* positions; /* [3 * num_vertices] bind-space positions */
+  int64_t num_triangles;
+  const int32_t* triangles; /* [3 * num_triangles] vertex indices */
+  int32_t influences;       /* k influences per vertex (e.g. 4) */
+  const int32_t* joints;    /* [k * num_vertices] joint indices (ignored by weight prediction) */
+  const float* weights;     /* [k * num_vertices] (ignored by weight prediction) */
+} gatcore_mesh;
+
+/* ---- Corrective deformer (densegats, its ablations, origat checkpoints) ---- */
+typedef struct gatcore_deformer gatcore_deformer;
+
+gatcore_status gatcore_deformer_load(const char* checkpoint, gatcore_device device, gatcore_deformer** out);
+/* A new, unbound deformer sharing `src`'s loaded model (another character or thread). */
+gatcore_status gatcore_deformer_share(const gatcore_deformer* src, gatcore_deformer** out);
+void gatcore_deformer_destroy(gatcore_deformer* d); /* NULL is fine */
+
+/* Binds a character: everything that depends only on the rest pose is
+ * computed here. `aliases`: optional "JOINT=BONE" strings mapping a joint name
+ * to one of the model's bones (as `gat deform --alias`). */
+gatcore_status gatcore_deformer_bind(gatcore_deformer* d, const gatcore_mesh* mesh, const gatcore_skeleton* skeleton,
+                                     const char* const* aliases, int32_t num_aliases);
+/* One frame: joint_globals [16 * num_joints] -> out_positions
+ * [3 * num_vertices] (required), out_normals [3 * num_vertices] (NULL: not
+ * wanted). num_joints / num_vertices must be the bound character's. */
+gatcore_status gatcore_deformer_deform(gatcore_deformer* d, const float* joint_globals, int32_t num_joints,
+                                       float* out_positions, float* out_normals, int64_t num_vertices);
+gatcore_status gatcore_deformer_info(const gatcore_deformer* d, int64_t* num_vertices, int32_t* num_joints,
+                                     int32_t* mapped_joints, int64_t* parameters);
+/* Milliseconds of the last deform: features, model, total (any may be NULL). */
+gatcore_status gatcore_deformer_last_timing(const gatcore_deformer* d, double* features_ms, double* model_ms,
+                                            double* total_ms);
+
+/* ---- Skin-weight prediction (neuroskinning, pointnet, fc checkpoints) ---- */
+typedef struct gatcore_weight_predictor gatcore_weight_predictor;
+
+gatcore_status gatcore_weight_predictor_load(const char* checkpoint, gatcore_device device,
+                                             gatcore_weight_predictor** out);
+void gatcore_weight_predictor_destroy(gatcore_weight_predictor* p);
+/* The mesh's own joints / weights are not read. Writes k influences per
+ * vertex, strongest first, padded with (joint 0, weight 0):
+ * out_joints / out_weights [k * num_vertices]. */
+gatcore_status gatcore_weight_predictor_predict(gatcore_weight_predictor* p, const gatcore_mesh* mesh,
+                                                const gatcore_skeleton* skeleton, int32_t k, int32_t* out_joints,
+                                                float* out_weights);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* GATCORE_H */

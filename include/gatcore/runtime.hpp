@@ -1,0 +1,127 @@
+#pragma once
+// gatcore's runtime: a trained model inside an engine or DCC plugin, every
+// frame, on the character being posed. (gatcore.h is the C API over it.)
+//
+//   auto d = gatcore::runtime::Deformer::load("corrective.gcm");
+//   d.bind(rest_mesh, skeleton);               // once: everything that depends on the rest pose
+//   for each frame:
+//     d.deform(joint_globals, positions);      // LBS + the model's correction, into caller memory
+//
+// Deformer: a displacement checkpoint (densegats, its ablations, origat)
+// applied to one character. bind() computes everything that depends only on
+// the rest pose (normalisation, the mesh graph, the smoothing adjacency and
+// rest details of the distortion columns, the bone mapping) and allocates
+// every per-frame buffer and the model's workspace (models::DeployPlan);
+// deform() then allocates nothing on the CPU (tested) and gives exactly
+// `gat deform`'s numbers (tested bitwise). One Deformer per character; the
+// loaded model is immutable and shared by share(), so characters can be
+// deformed from different threads at once (CPU; the Vulkan backend is one
+// command stream: deformers on Vulkan are serialised internally).
+//
+// Frames: joint_globals[j] is joint j's joint-to-model-space matrix
+// (column-major 4x4, as character::global_transforms gives for a pose; in an
+// engine: the bone's transform relative to the skinned mesh's root). Output
+// positions are in the same space as linear blend skinning with those
+// matrices and the skeleton's inverse bind matrices.
+//
+// WeightPredictor: a skin-weight checkpoint (neuroskinning, ..., fc,
+// pointnet) predicting a new character's skin weights (a one-off per
+// character, not per frame: it allocates).
+//
+// Errors: gatcore::Error (InvalidArgument for bad input) with a message
+// naming the argument / file / value. No dependency on datasets, importers
+// or training code.
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "gatcore/character/rig/mesh.hpp"
+#include "gatcore/character/rig/skeleton.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
+#include "gatcore/tensor.hpp"
+
+namespace gatcore::runtime {
+
+// Where a model runs. automatic: the Vulkan device when this build has the
+// backend and a GPU is found (vulkan::select("auto")), else the CPU.
+enum class DeviceChoice { cpu, automatic, vulkan };
+Device resolve_device(DeviceChoice d);
+
+struct LoadedCorrective;  // the immutable loaded model (shared)
+
+struct BindOptions {
+  // The character's joint names -> the model's bone names (as gat deform --alias).
+  character::BoneAliases aliases;
+  std::string name = "character";  // for messages
+};
+
+// Timings of the last deform() (milliseconds).
+struct FrameTiming {
+  double features_ms = 0, model_ms = 0, total_ms = 0;
+};
+
+class Deformer {
+ public:
+  // Loads a displacement checkpoint. Throws naming the file for a missing /
+  // corrupt file or a model that does not predict displacements.
+  static Deformer load(const std::string& checkpoint, DeviceChoice device = DeviceChoice::cpu);
+  // A new, unbound deformer sharing this one's loaded model.
+  Deformer share() const;
+  Deformer(Deformer&&) noexcept;
+  Deformer& operator=(Deformer&&) noexcept;
+  ~Deformer();
+
+  // The rest mesh (bind-space positions, triangles, skin weights on the
+  // skeleton's joints) and its skeleton (names, parents, rest local
+  // transforms, inverse bind matrices). Both are checked (validate());
+  // rebinding replaces the previous character.
+  void bind(const character::Mesh& rest, const character::Skeleton& skeleton, const BindOptions& opt = {});
+  bool bound() const;
+  std::int64_t num_vertices() const;  // of the bound mesh
+  std::int32_t num_joints() const;
+  // joint_globals: [num_joints]; out_positions: [3 num_vertices]; out_normals
+  // (optional, empty span = not wanted): [3 num_vertices] unit area-weighted
+  // normals of the corrected mesh. `out_lbs` (optional): the plain linear
+  // blend skinning positions, for comparison.
+  void deform(std::span<const float> joint_globals, std::span<float> out_positions,
+              std::span<float> out_normals = {}, std::span<float> out_lbs = {});
+  FrameTiming last_timing() const;
+
+  // The model: name ("densegats", ...), its bones, its parameter count, where it runs.
+  const std::string& model_name() const;
+  const std::vector<std::string>& bones() const;
+  std::int64_t parameter_count() const;
+  Device device() const;
+  // Joints of the bound character that matched a model bone.
+  std::int32_t mapped_joints() const;
+
+ private:
+  struct Bound;
+  explicit Deformer(std::shared_ptr<const LoadedCorrective> m);
+  std::shared_ptr<const LoadedCorrective> model_;
+  std::unique_ptr<Bound> bound_;
+};
+
+struct LoadedWeights;
+
+class WeightPredictor {
+ public:
+  static WeightPredictor load(const std::string& checkpoint, DeviceChoice device = DeviceChoice::cpu);
+  WeightPredictor(WeightPredictor&&) noexcept;
+  WeightPredictor& operator=(WeightPredictor&&) noexcept;
+  ~WeightPredictor();
+  // Skin weights on the skeleton's joints for the mesh's vertices (the mesh's
+  // own weights, if any, are ignored), at most `max_influences` per vertex.
+  // Not thread-safe on one predictor (the model runs in place); use one per thread.
+  character::SkinWeights predict(const character::Mesh& rest, const character::Skeleton& skeleton,
+                                 int max_influences = 4, const BindOptions& opt = {});
+  const std::vector<std::string>& bones() const;
+
+ private:
+  explicit WeightPredictor(std::unique_ptr<LoadedWeights> m);
+  std::unique_ptr<LoadedWeights> model_;
+};
+
+}  // namespace gatcore::runtime

@@ -1,0 +1,375 @@
+// Deploy-time inference (deploy.hpp): the forward passes of densegats.cpp /
+// origat.cpp / nn::GatBlock / nn::DenseLayer replayed with the backend's
+// forward kernels into buffers allocated once per plan. The order of kernel
+// calls and their arguments follow those files exactly: that is what makes
+// the results bitwise equal to models::predict (test_deploy checks it), so a
+// change to a model's forward must be mirrored here.
+#include "gatcore/models/deploy.hpp"
+
+#include <cmath>
+
+#include "gatcore/backend.hpp"
+#include "gatcore/vulkan.hpp"
+#include "kernels/batchnorm.hpp"
+
+namespace gatcore::models {
+
+namespace {
+
+// BatchNorm1d's eps: every model builds its BatchNorms with the default
+// (nn::BatchNorm1d), which the registry does not record.
+constexpr float kBatchNormEps = 1e-5f;
+
+struct DenseStep {  // y = act(x W + b) (act identity: no activation call)
+  Tensor W, b;
+  Activation act = Activation::identity;
+  float slope = 0.f;
+};
+
+struct GatStep {  // nn::GatBlock in eval mode
+  Tensor W, att_dst, att_src, self_W, self_b;
+  int heads = 0, head_dim = 0;
+  std::int64_t self_width = 0;
+  float slope = 0.2f;
+  bool bn = false;
+  Tensor bn_mean, bn_scale, bn_shift;     // CPU: batchnorm_affine_forward
+  Tensor bn_gamma, bn_beta, bn_rm, bn_rv;  // other devices: batchnorm_eval_forward
+  std::int64_t kf() const { return std::int64_t(heads) * head_dim; }
+  std::int64_t width() const { return kf() + self_width; }
+};
+
+struct OriLayer {
+  Tensor W, att_dst, att_src, b;
+  int heads = 1;
+  bool act = true;
+};
+
+}  // namespace
+
+struct DeployModel {
+  ModelConfig cfg;
+  Device device = Device::cpu;
+  Normaliser norm;  // host
+  std::int64_t params = 0;
+  bool origat = false;
+  // densegats family
+  std::vector<DenseStep> transform, head;
+  std::vector<std::vector<GatStep>> modules;
+  std::vector<GatStep> transitions;
+  std::vector<std::int64_t> module_in;
+  bool dense = true;
+  // origat
+  std::vector<OriLayer> layers;
+};
+
+namespace {
+
+class Loader {
+ public:
+  Loader(const Model& m, Device d, std::int64_t& count) : reg_(m.registry()), name_(m.config().name), dev_(d), count_(count) {}
+  Tensor param(const std::string& name) {
+    const Var* p = reg_.find_param(name);
+    GATCORE_CHECK(p, "deploy: model '", name_, "' has no parameter '", name, "'");
+    return place(p->value());
+  }
+  Tensor buffer(const std::string& name) {
+    const Tensor* t = reg_.find_buffer(name);
+    GATCORE_CHECK(t, "deploy: model '", name_, "' has no buffer '", name, "'");
+    return place(*t);
+  }
+  Tensor host(const Tensor& t) const { return to(t, Device::cpu).clone(); }
+  Tensor place(const Tensor& t) {
+    count_ += t.numel();
+    Tensor h = host(t);  // a copy: the deploy model does not share the Model's storage
+    return dev_ == Device::cpu ? h : to(h, dev_);
+  }
+  Tensor buffer_host(const std::string& name) const {
+    const Tensor* t = reg_.find_buffer(name);
+    GATCORE_CHECK(t, "deploy: model '", name_, "' has no buffer '", name, "'");
+    return host(*t);
+  }
+  Tensor param_host(const std::string& name) const {
+    const Var* p = reg_.find_param(name);
+    GATCORE_CHECK(p, "deploy: model '", name_, "' has no parameter '", name, "'");
+    return host(p->value());
+  }
+
+ private:
+  const nn::Registry& reg_;
+  std::string name_;
+  Device dev_;
+  std::int64_t& count_;
+};
+
+DenseStep dense_step(Loader& L, const std::string& prefix, Activation act, float slope) {
+  return {L.param(prefix + "W"), L.param(prefix + "b"), act, slope};
+}
+
+GatStep gat_step(Loader& L, const std::string& p, const ModelConfig& c, Device dev) {
+  GatStep s;
+  s.heads = c.heads;
+  s.head_dim = c.head_dim;
+  s.self_width = std::int64_t(std::lround(double(c.beta) * double(s.kf())));  // as nn::GatBlock
+  s.W = L.param(p + "W");
+  s.att_dst = L.param(p + "att_dst");
+  s.att_src = L.param(p + "att_src");
+  if (s.self_width > 0) {
+    s.self_W = L.param(p + "self.W");
+    s.self_b = L.param(p + "self.b");
+  }
+  s.bn = c.batch_norm;
+  if (s.bn) {
+    if (dev == Device::cpu) {
+      const Tensor gamma = L.param_host(p + "bn.gamma"), rv = L.buffer_host(p + "bn.running_var");
+      s.bn_scale = Tensor::empty(1, s.width());
+      cpu::batchnorm_eval_scale(gamma, rv, kBatchNormEps, s.bn_scale);
+      s.bn_mean = L.buffer(p + "bn.running_mean");
+      s.bn_shift = L.param(p + "bn.beta");
+    } else {
+      s.bn_gamma = L.param(p + "bn.gamma");
+      s.bn_beta = L.param(p + "bn.beta");
+      s.bn_rm = L.buffer(p + "bn.running_mean");
+      s.bn_rv = L.buffer(p + "bn.running_var");
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+bool deployable(const ModelConfig& c) {
+  return c.task == Task::displacement && (c.name.rfind("densegats", 0) == 0 || c.name == "origat");
+}
+
+std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normaliser& norm, Device device) {
+  const ModelConfig& c = model.config();
+  GATCORE_CHECK(deployable(c), "deploy: model '", c.name, "' (", task_name(c.task),
+                ") has no deploy path; the runtime deforms with displacement models (densegats, densegats-noself, "
+                "densegats-nodense, origat)");
+  GATCORE_CHECK(device == Device::cpu || has_backend(device), "deploy: no ", device_name(device), " backend");
+  auto d = std::make_shared<DeployModel>();
+  d->cfg = c;
+  d->device = device;
+  d->norm.target_scale = norm.target_scale;
+  if (norm.defined()) {
+    check_shape(norm.mean, 1, c.in_dim, "deploy: normaliser mean");
+    check_shape(norm.inv_std, 1, c.in_dim, "deploy: normaliser inv_std");
+    d->norm.mean = to(norm.mean, Device::cpu).clone();
+    d->norm.inv_std = to(norm.inv_std, Device::cpu).clone();
+  }
+  model.fold_batch_norm();
+  Loader L(model, device, d->params);
+  if (c.name == "origat") {
+    d->origat = true;
+    for (int l = 0; l < c.gat_layers; ++l) {
+      const std::string p = "layers." + std::to_string(l) + ".";
+      OriLayer o;
+      o.W = L.param(p + "W");
+      o.att_dst = L.param(p + "att_dst");
+      o.att_src = L.param(p + "att_src");
+      o.b = L.param(p + "b");
+      o.heads = int(o.att_dst.rows());
+      o.act = l + 1 < c.gat_layers;
+      d->layers.push_back(std::move(o));
+    }
+    return d;
+  }
+  // DenseGATs: DenseLayers with tanh (densegats.cpp's DenseLayerOptions; the
+  // slope is unused by tanh but passed as there).
+  for (std::size_t k = 0; k < c.transform.size(); ++k)
+    d->transform.push_back(dense_step(L, "transform." + std::to_string(k) + ".lin.", Activation::tanh, 0.f));
+  d->dense = c.dense;
+  std::int64_t w = c.transform.back();
+  for (int m = 0; m < c.modules; ++m) {
+    d->module_in.push_back(w);
+    std::vector<GatStep> blocks;
+    for (int b = 0; b < c.blocks; ++b)
+      blocks.push_back(gat_step(L, "modules." + std::to_string(m) + ".blocks." + std::to_string(b) + ".", c, device));
+    const std::int64_t bw = blocks.front().width();
+    w = c.dense ? w + std::int64_t(c.blocks) * bw : bw;
+    d->modules.push_back(std::move(blocks));
+    if (m + 1 < c.modules) {
+      d->transitions.push_back(gat_step(L, "transitions." + std::to_string(m) + ".", c, device));
+      w = d->transitions.back().width();
+    }
+  }
+  for (std::size_t k = 0; k < c.head.size(); ++k)
+    d->head.push_back(dense_step(L, "head." + std::to_string(k) + ".lin.", Activation::tanh, 0.f));
+  d->head.push_back(dense_step(L, "head." + std::to_string(c.head.size()) + ".", Activation::identity, 0.f));
+  GATCORE_CHECK(d->head.back().W.rows() == (d->head.size() > 1 ? c.head.back() : w), "deploy: model '", c.name,
+                "': head input width does not match the configuration");
+  return d;
+}
+
+const ModelConfig& deploy_config(const DeployModel& m) { return m.cfg; }
+Device deploy_device(const DeployModel& m) { return m.device; }
+std::int64_t deploy_parameter_count(const DeployModel& m) { return m.params; }
+
+struct DeployPlan::Buffers {
+  Tensor x;  // the model input on the device (CPU: x_host_ itself)
+  std::vector<Tensor> t_lin, t_act, h_lin, h_act;
+  std::vector<Tensor> mod;
+  Tensor z, both, tsh, el, er, alpha;  // GAT block scratch, reused by every block
+  std::vector<Tensor> o_z, o_y, o_act, o_el, o_er, o_alpha;  // origat, per layer
+};
+
+DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
+    : model_(std::move(model)), graph_(std::move(graph)) {
+  GATCORE_CHECK(model_ && graph_, "DeployPlan: needs a model and a graph");
+  const DeployModel& M = *model_;
+  n_ = graph_->num_nodes;
+  GATCORE_CHECK(n_ > 0, "DeployPlan: the graph has no nodes");
+  Backend& be = backend(M.device);
+  buf_ = std::make_unique<Buffers>();
+  Buffers& B = *buf_;
+  x_host_ = Tensor::empty(n_, M.cfg.in_dim);
+  B.x = M.device == Device::cpu ? x_host_ : be.empty(n_, M.cfg.in_dim);
+  const std::int64_t E = graph_->num_edges();
+  if (M.origat) {
+    for (const OriLayer& L : M.layers) {
+      B.o_z.push_back(be.empty(n_, L.W.cols()));
+      B.o_y.push_back(be.empty(n_, L.W.cols()));
+      B.o_act.push_back(L.act ? be.empty(n_, L.W.cols()) : Tensor{});
+      B.o_el.push_back(be.empty(n_, L.heads));
+      B.o_er.push_back(be.empty(n_, L.heads));
+      B.o_alpha.push_back(be.empty(E, L.heads));
+    }
+  } else {
+    for (std::size_t k = 0; k < M.transform.size(); ++k) {
+      B.t_lin.push_back(be.empty(n_, M.transform[k].W.cols()));
+      B.t_act.push_back(k + 1 < M.transform.size() ? be.empty(n_, M.transform[k].W.cols()) : Tensor{});
+    }
+    for (std::size_t m = 0; m < M.modules.size(); ++m)
+      B.mod.push_back(be.empty(n_, M.module_in[m] + std::int64_t(M.modules[m].size()) * M.modules[m].front().width()));
+    const GatStep& g = M.modules.front().front();
+    B.z = be.empty(n_, g.kf());
+    B.both = be.empty(n_, g.width());
+    B.tsh = g.bn ? be.empty(n_, g.width()) : Tensor{};
+    B.el = be.empty(n_, g.heads);
+    B.er = be.empty(n_, g.heads);
+    B.alpha = be.empty(E, g.heads);
+    for (std::size_t k = 0; k < M.head.size(); ++k) {
+      B.h_lin.push_back(be.empty(n_, M.head[k].W.cols()));
+      B.h_act.push_back(M.head[k].act != Activation::identity ? be.empty(n_, M.head[k].W.cols()) : Tensor{});
+    }
+  }
+  y_host_ = Tensor::empty(n_, M.cfg.out_dim);
+}
+
+DeployPlan::~DeployPlan() {
+  if (model_ && model_->device == Device::vulkan) vulkan::forget_graph(graph_.get());
+}
+
+namespace {
+
+// nn::GatBlock::forward (eval) of `x` into `out`.
+void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x, const Tensor& out, Tensor& z,
+               Tensor& both, Tensor& tsh, Tensor& el, Tensor& er, Tensor& alpha) {
+  const std::int64_t kf = s.kf();
+  be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
+  be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
+  be.gat_fused_additive_forward(g, z, el, er, s.slope, both.cols_slice(0, kf), alpha);
+  if (s.self_width > 0) {
+    const Tensor self = both.cols_slice(kf, kf + s.self_width);
+    be.gemm(x, false, s.self_W, false, self, 1.0f, 0.0f);
+    be.add_row_bias(s.self_b, self);
+  }
+  if (!s.bn) {
+    be.activation_forward(Activation::tanhshrink, both, out, 0.f);
+    return;
+  }
+  be.activation_forward(Activation::tanhshrink, both, tsh, 0.f);
+  if (be.device() == Device::cpu)
+    cpu::batchnorm_affine_forward(tsh, s.bn_mean, s.bn_scale, s.bn_shift, out);
+  else
+    be.batchnorm_eval_forward(tsh, s.bn_gamma, s.bn_beta, s.bn_rm, s.bn_rv, kBatchNormEps, out);
+}
+
+// nn::DenseLayer::forward (eval, folded) / Linear::forward of `x`.
+void dense_step(Backend& be, const DenseStep& s, const Tensor& x, const Tensor& lin, const Tensor& out) {
+  be.gemm(x, false, s.W, false, lin, 1.0f, 0.0f);
+  be.add_row_bias(s.b, lin);
+  if (s.act != Activation::identity) be.activation_forward(s.act, lin, out, s.slope);
+}
+
+}  // namespace
+
+const Tensor& DeployPlan::run() {
+  const DeployModel& M = *model_;
+  Backend& be = backend(M.device);
+  Buffers& B = *buf_;
+  const CsrGraph& g = *graph_;
+  // Normaliser::apply, in place.
+  if (M.norm.defined()) {
+    const float* mean = M.norm.mean.data();
+    const float* inv = M.norm.inv_std.data();
+    const std::int64_t d = x_host_.cols();
+    for (std::int64_t i = 0; i < n_; ++i) {
+      float* r = x_host_.row(i);
+      for (std::int64_t j = 0; j < d; ++j) r[j] = (r[j] - mean[j]) * inv[j];
+    }
+  }
+  if (M.device != Device::cpu) B.x = be.from_host(x_host_);
+  Tensor out;
+  if (M.origat) {
+    // origat.cpp: z = gat(x W), y = z + b (the ones-column product adds b
+    // exactly as add_row_bias does), LeakyReLU(0.01) between layers.
+    Tensor y = B.x;
+    for (std::size_t l = 0; l < M.layers.size(); ++l) {
+      const OriLayer& L = M.layers[l];
+      be.gemm(y, false, L.W, false, B.o_z[l], 1.0f, 0.0f);
+      be.attention_projection_forward(B.o_z[l], L.att_dst, L.att_src, B.o_el[l], B.o_er[l]);
+      be.gat_fused_additive_forward(g, B.o_z[l], B.o_el[l], B.o_er[l], 0.2f, B.o_y[l], B.o_alpha[l]);
+      be.add_row_bias(L.b, B.o_y[l]);
+      y = B.o_y[l];
+      if (L.act) {
+        be.activation_forward(Activation::leaky_relu, y, B.o_act[l], 0.01f);
+        y = B.o_act[l];
+      }
+    }
+    out = y;
+  } else {
+    Tensor y = B.x;
+    for (std::size_t k = 0; k < M.transform.size(); ++k) {
+      const Tensor dst = k + 1 == M.transform.size() ? B.mod[0].cols_slice(0, M.module_in[0]) : B.t_act[k];
+      dense_step(be, M.transform[k], y, B.t_lin[k], dst);
+      y = dst;
+    }
+    for (std::size_t m = 0; m < M.modules.size(); ++m) {
+      const Tensor& buf = B.mod[m];
+      const std::int64_t bw = M.modules[m].front().width();
+      std::int64_t c0 = M.module_in[m], prev = 0;
+      for (const GatStep& s : M.modules[m]) {
+        const Tensor input = M.dense ? buf.cols_slice(0, c0) : buf.cols_slice(prev, c0);
+        gat_block(be, g, s, input, buf.cols_slice(c0, c0 + bw), B.z, B.both, B.tsh, B.el, B.er, B.alpha);
+        prev = c0;
+        c0 += bw;
+      }
+      y = M.dense ? buf : buf.cols_slice(prev, c0);
+      if (m + 1 < M.modules.size())
+        gat_block(be, g, M.transitions[m], y, B.mod[m + 1].cols_slice(0, M.module_in[m + 1]), B.z, B.both, B.tsh,
+                  B.el, B.er, B.alpha);
+    }
+    for (std::size_t k = 0; k < M.head.size(); ++k) {
+      dense_step(be, M.head[k], y, B.h_lin[k], B.h_act[k]);
+      y = M.head[k].act != Activation::identity ? B.h_act[k] : B.h_lin[k];
+    }
+    out = y;
+  }
+  if (M.device == Device::cpu) {
+    y_host_.copy_from_(out);
+  } else {
+    y_host_.copy_from_(be.to_host(out));
+  }
+  // models::predict: divided by the target scale.
+  if (M.norm.target_scale != 1.f) {
+    const float ts = M.norm.target_scale;
+    for (std::int64_t i = 0; i < n_; ++i) {
+      float* r = y_host_.row(i);
+      for (std::int64_t j = 0; j < y_host_.cols(); ++j) r[j] /= ts;
+    }
+  }
+  return y_host_;
+}
+
+}  // namespace gatcore::models

@@ -1,0 +1,59 @@
+// runtime::WeightPredictor: a skin-weight checkpoint applied to a new
+// character (predict_skin_weights, as gat predict-weights), behind the
+// runtime's load / predict interface.
+#include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/inference/weight_prediction.hpp"
+#include "gatcore/error.hpp"
+#include "gatcore/models/checkpoint.hpp"
+#include "gatcore/runtime.hpp"
+
+namespace gatcore::runtime {
+
+struct LoadedWeights {
+  models::LoadedModel lm;
+  std::vector<std::string> bones;
+};
+
+WeightPredictor::WeightPredictor(std::unique_ptr<LoadedWeights> m) : model_(std::move(m)) {}
+WeightPredictor::WeightPredictor(WeightPredictor&&) noexcept = default;
+WeightPredictor& WeightPredictor::operator=(WeightPredictor&&) noexcept = default;
+WeightPredictor::~WeightPredictor() = default;
+
+WeightPredictor WeightPredictor::load(const std::string& path, DeviceChoice device) {
+  const Device dev = resolve_device(device);
+  auto m = std::make_unique<LoadedWeights>();
+  m->lm = models::load_checkpoint(path);
+  m->bones = character::character_model_bones(m->lm, path, models::Task::weights);
+  m->lm.model->to(dev);
+  m->lm.model->fold_batch_norm();
+  return WeightPredictor(std::move(m));
+}
+
+const std::vector<std::string>& WeightPredictor::bones() const { return model_->bones; }
+
+character::SkinWeights WeightPredictor::predict(const character::Mesh& rest, const character::Skeleton& skeleton,
+                                                int max_influences, const BindOptions& opt) {
+  GATCORE_CHECK(model_, "WeightPredictor::predict: no model loaded");
+  skeleton.validate((opt.name + " skeleton").c_str());
+  character::Character ch;
+  ch.name = opt.name;
+  ch.skeleton = skeleton;
+  if (ch.skeleton.root_parent.size() != ch.skeleton.names.size())
+    ch.skeleton.root_parent.assign(ch.skeleton.names.size(), character::mat4_identity());
+  ch.mesh.positions = rest.positions;
+  ch.mesh.triangles = rest.triangles;
+  // The mesh's own weights are not used; a placeholder binding to joint 0 lets
+  // Mesh::validate check positions and triangles.
+  const std::int64_t n = ch.mesh.num_vertices();
+  ch.mesh.weights.ptr.resize(std::size_t(n + 1));
+  for (std::int64_t v = 0; v <= n; ++v) ch.mesh.weights.ptr[std::size_t(v)] = v;
+  ch.mesh.weights.joint.assign(std::size_t(n), 0);
+  ch.mesh.weights.weight.assign(std::size_t(n), 1.0f);
+  ch.mesh.validate(skeleton.num_joints(), (opt.name + " mesh").c_str());
+  GATCORE_CHECK(n > 0 && ch.mesh.num_triangles() > 0, opt.name, ": the mesh has no triangles");
+  return character::predict_skin_weights(*model_->lm.model, model_->lm.norm, model_->bones, ch, max_influences,
+                                         opt.aliases)
+      .weights;
+}
+
+}  // namespace gatcore::runtime

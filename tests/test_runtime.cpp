@@ -1,0 +1,411 @@
+// The runtime (runtime.hpp): Deformer gives bitwise gat deform's numbers
+// (make_corrective_deformer + deform_frame on the loaded, folded checkpoint),
+// allocates nothing per frame (a counting malloc hook), runs two characters
+// on two threads at once with unchanged results, and reports bad input as
+// errors naming what is wrong. WeightPredictor equals predict_skin_weights.
+#include <catch2/catch.hpp>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <algorithm>
+#include <filesystem>
+#include <malloc.h>
+#include <thread>
+
+#include <link.h>
+
+#include "gatcore/character/inference/corrective.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/inference/weight_prediction.hpp"
+#include "gatcore/models/checkpoint.hpp"
+#include "gatcore/gatcore.h"
+#include "gatcore/runtime.hpp"
+#include "vulkan_test_util.hpp"
+
+// ---- Counting allocator: every malloc-family call of the process goes
+// through these (glibc allows replacing malloc; operator new, std::vector,
+// Tensor storage (aligned_alloc) and libgomp all end here). Counting is on
+// only inside a window the test opens.
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void __libc_free(void*);
+}
+//
+// libgomp allocates a team descriptor for every parallel region that runs
+// with one thread (a kernel's `if (...)` clause false on small shapes: it
+// caches only teams of several threads). Those calls come from inside
+// libgomp, so they are told apart by the caller's address (libgomp's loaded
+// segments) and counted separately: they are the OpenMP runtime's, not a
+// buffer of gatcore's.
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_allocations{0}, g_gomp_allocations{0};
+std::uintptr_t g_gomp_lo = 0, g_gomp_hi = 0;
+
+int find_gomp(dl_phdr_info* info, std::size_t, void*) {
+  if (!info->dlpi_name || !std::strstr(info->dlpi_name, "libgomp")) return 0;
+  for (int i = 0; i < info->dlpi_phnum; ++i)
+    if (info->dlpi_phdr[i].p_type == PT_LOAD) {
+      const std::uintptr_t lo = info->dlpi_addr + info->dlpi_phdr[i].p_vaddr, hi = lo + info->dlpi_phdr[i].p_memsz;
+      if (!g_gomp_lo || lo < g_gomp_lo) g_gomp_lo = lo;
+      g_gomp_hi = std::max(g_gomp_hi, hi);
+    }
+  return 1;
+}
+
+__attribute__((always_inline)) inline void count(void* caller) {
+  if (!g_counting.load(std::memory_order_relaxed)) return;
+  const auto a = reinterpret_cast<std::uintptr_t>(caller);
+  if (a >= g_gomp_lo && a < g_gomp_hi)
+    g_gomp_allocations.fetch_add(1, std::memory_order_relaxed);
+  else
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+}
+}  // namespace
+extern "C" {
+void* malloc(std::size_t n) {
+  count(__builtin_return_address(0));
+  return __libc_malloc(n);
+}
+void* calloc(std::size_t a, std::size_t b) {
+  count(__builtin_return_address(0));
+  return __libc_calloc(a, b);
+}
+void* realloc(void* p, std::size_t n) {
+  count(__builtin_return_address(0));
+  return __libc_realloc(p, n);
+}
+void* memalign(std::size_t al, std::size_t n) {
+  count(__builtin_return_address(0));
+  return __libc_memalign(al, n);
+}
+void* aligned_alloc(std::size_t al, std::size_t n) {
+  count(__builtin_return_address(0));
+  return __libc_memalign(al, n);
+}
+int posix_memalign(void** p, std::size_t al, std::size_t n) {
+  count(__builtin_return_address(0));
+  *p = __libc_memalign(al, n);
+  return *p ? 0 : ENOMEM;
+}
+void free(void* p) { __libc_free(p); }
+}
+
+using namespace gatcore;
+using namespace gatcore::character;
+using Catch::Matchers::Contains;
+
+namespace {
+
+std::string tmp(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "gatcore_runtime_tests";
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+Character humanoid(std::uint32_t seed) {
+  ProceduralOptions o;
+  o.seed = seed;
+  o.ring_segments = 8;
+  o.rings_per_bone = 3;
+  return procedural_character(o);
+}
+
+std::vector<std::string> bone_names(const Skeleton& s) {
+  std::vector<std::string> b;
+  for (const auto& n : s.names) b.push_back(normalise_bone_name(n));
+  b.push_back("tail");  // a bone the humanoids lack: its columns stay 0
+  return b;
+}
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
+// A fresh (untrained) displacement checkpoint on the humanoid's bones with
+// distortion columns at `scales`; BatchNorm statistics perturbed so folding
+// is not an identity. The plumbing, not the quality, is under test.
+std::string corrective_checkpoint(const std::string& name, const std::vector<std::string>& bones,
+                                  const std::string& scales, int n_scales) {
+  models::ModelConfig cfg = models::ModelConfig::defaults(name, 6 + std::int64_t(bones.size()) + 3 * n_scales, 3);
+  cfg.modules = 2, cfg.blocks = 2, cfg.head = {32}, cfg.gat_layers = 3;
+  auto m = models::make_model(cfg, 7);
+  std::uint32_t k = 1;
+  for (auto& b : m->registry().buffers)
+    for (std::int64_t c = 0; c < b.tensor.cols(); ++c)
+      b.tensor.at(0, c) = (b.name.find("var") != std::string::npos ? 0.5f : 0.f) + 0.1f * float((k++ * 37) % 11);
+  models::Normaliser norm;
+  norm.mean = Tensor::zeros(1, cfg.in_dim);
+  norm.inv_std = Tensor::full(1, cfg.in_dim, 2.f);
+  for (std::int64_t c = 0; c < cfg.in_dim; ++c) norm.mean.at(0, c) = 0.01f * float(c % 5);
+  norm.target_scale = 4.f;
+  const std::string path = tmp(name + "_" + std::to_string(n_scales) + ".gcm");
+  models::save_checkpoint(path, *m, norm, nullptr,
+                          {{"features", "densegats"}, {"skeleton", joined(bones)}, {"distortion_scales", scales}});
+  return path;
+}
+
+// A pose away from the bind pose: every joint turned, the root moved and turned
+// (the root-frame path), seeded.
+Pose test_pose(const Skeleton& s, int seed) {
+  Pose p = bind_pose(s);
+  for (std::size_t j = 0; j < p.local.size(); ++j) {
+    const float a = 0.3f * std::sin(float(seed * 7 + int(j) * 3));
+    p.local[j].rotation = quat_normalize(quat_mul(p.local[j].rotation, quat_from_axis_angle({0.3f, 1.f, 0.2f}, a)));
+  }
+  p.local[0].translation[0] += 0.2f * float(seed);
+  p.local[0].translation[2] -= 0.1f * float(seed);
+  return p;
+}
+
+std::vector<float> globals_of(const Skeleton& s, const Pose& p) {
+  const std::vector<Mat4> g = global_transforms(s, p);
+  std::vector<float> out;
+  for (const Mat4& m : g) out.insert(out.end(), m.begin(), m.end());
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("runtime::Deformer gives gat deform's numbers bitwise", "[runtime]") {
+  const Character ch = humanoid(3);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  for (const auto& [name, scales, ns] : {std::tuple{"densegats", "1,4", 2}, std::tuple{"densegats", "none", 0},
+                                         std::tuple{"origat", "2", 1}, std::tuple{"densegats-nodense", "1", 1}}) {
+    INFO("model " << name << " distortion scales " << scales);
+    const std::string path = corrective_checkpoint(name, bones, scales, ns);
+    // gat deform's path.
+    models::LoadedModel lm = models::load_checkpoint(path);
+    lm.model->fold_batch_norm();
+    const CorrectiveDeformer ref = make_corrective_deformer(ch, bones, {}, checkpoint_distortion_scales(lm.file, path));
+
+    runtime::Deformer d = runtime::Deformer::load(path);
+    d.bind(ch.mesh, ch.skeleton);
+    REQUIRE(d.num_vertices() == ch.mesh.num_vertices());
+    CHECK(d.mapped_joints() == ch.skeleton.num_joints());
+    CHECK(d.model_name() == name);
+    const std::size_t n3 = std::size_t(3 * d.num_vertices());
+    std::vector<float> out(n3), lbs(n3), normals(n3);
+    for (int f = 0; f < 3; ++f) {
+      const Pose pose = test_pose(ch.skeleton, f);
+      const CorrectedFrame cf = deform_frame(ref, *lm.model, lm.norm, pose);
+      d.deform(globals_of(ch.skeleton, pose), out, normals, lbs);
+      REQUIRE(cf.corrected.size() == n3);
+      std::size_t differ = 0;
+      float corr = 0;
+      for (std::size_t i = 0; i < n3; ++i) {
+        differ += out[i] != cf.corrected[i] || lbs[i] != cf.lbs[i];
+        corr = std::max(corr, std::abs(out[i] - lbs[i]));
+      }
+      CHECK(differ == 0);
+      CHECK(corr > 0.f);  // a real correction was compared
+      CHECK(normals == vertex_normals(out, ch.mesh.triangles));
+    }
+  }
+}
+
+TEST_CASE("runtime::Deformer::deform allocates nothing after bind", "[runtime]") {
+  const Character ch = humanoid(4);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  for (const auto& [name, scales, ns] : {std::tuple{"densegats", "1,4,16", 3}, std::tuple{"origat", "none", 0}}) {
+    INFO("model " << name);
+    runtime::Deformer d = runtime::Deformer::load(corrective_checkpoint(name, bones, scales, ns));
+    d.bind(ch.mesh, ch.skeleton);
+    const std::size_t n3 = std::size_t(3 * d.num_vertices());
+    std::vector<float> out(n3), normals(n3);
+    std::vector<std::vector<float>> frames;
+    for (int f = 0; f < 4; ++f) frames.push_back(globals_of(ch.skeleton, test_pose(ch.skeleton, f)));
+    dl_iterate_phdr(find_gomp, nullptr);
+    d.deform(frames[0], out, normals);  // warm-up: thread pools, thread-local GEMM packing buffers
+    d.deform(frames[1], out, normals);
+    g_allocations = 0;
+    g_gomp_allocations = 0;
+    g_counting = true;
+    for (int f = 0; f < 4; ++f) d.deform(frames[std::size_t(f)], out, normals);
+    g_counting = false;
+    CHECK(g_allocations.load() == 0);
+    WARN("libgomp's own team allocations in 4 frames (one-thread parallel regions): " << g_gomp_allocations.load());
+    // The hook counts: a vector allocation in the window is seen.
+    g_counting = true;
+    { std::vector<float> probe(100); probe[0] = 1; }
+    g_counting = false;
+    CHECK(g_allocations.load() >= 1);
+  }
+}
+
+TEST_CASE("runtime::Deformer: two characters on two threads at once give their single-thread results",
+          "[runtime]") {
+  const Character a = humanoid(5), b = humanoid(6);
+  const std::vector<std::string> bones = bone_names(a.skeleton);
+  runtime::Deformer da = runtime::Deformer::load(corrective_checkpoint("densegats", bones, "1,4", 2));
+  runtime::Deformer db = da.share();
+  da.bind(a.mesh, a.skeleton);
+  db.bind(b.mesh, b.skeleton);
+  const int F = 6;
+  auto run = [](runtime::Deformer& d, const Character& ch, std::vector<std::vector<float>>& res) {
+    for (int f = 0; f < F; ++f) {
+      std::vector<float> out(std::size_t(3 * d.num_vertices()));
+      d.deform(globals_of(ch.skeleton, test_pose(ch.skeleton, f)), out);
+      res.push_back(std::move(out));
+    }
+  };
+  std::vector<std::vector<float>> ra1, rb1, ra2, rb2;
+  run(da, a, ra1);
+  run(db, b, rb1);
+  std::thread ta([&] { run(da, a, ra2); }), tb([&] { run(db, b, rb2); });
+  ta.join();
+  tb.join();
+  CHECK(ra1 == ra2);
+  CHECK(rb1 == rb2);
+  CHECK(ra1[0] != rb1[0]);
+}
+
+TEST_CASE("runtime::Deformer reports bad input as errors naming it", "[runtime]") {
+  const Character ch = humanoid(3);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  CHECK_THROWS_WITH(runtime::Deformer::load(tmp("missing.gcm")), Contains("missing.gcm"));
+  const std::string path = corrective_checkpoint("densegats", bones, "1", 1);
+  runtime::Deformer d = runtime::Deformer::load(path);
+  std::vector<float> out(std::size_t(3 * ch.mesh.num_vertices()));
+  const std::vector<float> g = globals_of(ch.skeleton, bind_pose(ch.skeleton));
+  CHECK_THROWS_WITH(d.deform(g, out), Contains("bind() a character first"));
+  d.bind(ch.mesh, ch.skeleton);
+  CHECK_THROWS_WITH(d.deform(std::span<const float>(g).first(16), out), Contains("16 per joint"));
+  CHECK_THROWS_WITH(d.deform(g, std::span<float>(out).first(6)), Contains("3 per vertex"));
+  std::vector<float> bad = g;
+  bad[16 * 2 + 5] = std::nanf("");
+  CHECK_THROWS_WITH(d.deform(bad, out), Contains("joint 2") && Contains("non-finite"));
+  Mesh broken = ch.mesh;
+  broken.triangles[4] = 1 << 30;
+  CHECK_THROWS_WITH(d.bind(broken, ch.skeleton), Contains("mesh"));
+  CHECK_FALSE(d.bound());
+  Skeleton stranger = ch.skeleton;
+  for (auto& n : stranger.names) n = "xx_" + n + "_yy";
+  CHECK_THROWS_WITH(d.bind(ch.mesh, stranger), Contains("none of its"));
+  // A skin-weight checkpoint is not a corrective model.
+  models::ModelConfig wc = models::ModelConfig::defaults("neuroskinning", 6 + std::int64_t(bones.size()),
+                                                         std::int64_t(bones.size()));
+  wc.stage1 = {16}, wc.gc_dims = {8, 8, 8}, wc.global_mlp = {32}, wc.classifier = {32}, wc.gc_pool = {4, 6, 8};
+  auto wm = models::make_model(wc, 1);
+  const std::string wpath = tmp("weights.gcm");
+  models::save_checkpoint(wpath, *wm, models::Normaliser{}, nullptr,
+                          {{"features", "neuroskinning"}, {"skeleton", joined(bones)}});
+  CHECK_THROWS_WITH(runtime::Deformer::load(wpath), Contains("weights.gcm"));
+
+  // WeightPredictor: predict_skin_weights' weights.
+  runtime::WeightPredictor wp = runtime::WeightPredictor::load(wpath);
+  const SkinWeights w = wp.predict(ch.mesh, ch.skeleton, 4);
+  models::LoadedModel lm = models::load_checkpoint(wpath);
+  lm.model->fold_batch_norm();
+  const WeightPrediction ref = predict_skin_weights(*lm.model, lm.norm, bones, ch, 4);
+  CHECK(w.ptr == ref.weights.ptr);
+  CHECK(w.joint == ref.weights.joint);
+  CHECK(w.weight == ref.weights.weight);
+  CHECK_THROWS_WITH(runtime::WeightPredictor::load(path), Contains("densegats"));
+}
+
+TEST_CASE("the C API gives the C++ runtime's numbers and its errors as codes", "[runtime][c_api]") {
+  const Character ch = humanoid(8);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  const std::string path = corrective_checkpoint("densegats", bones, "1,4", 2);
+  runtime::Deformer ref = runtime::Deformer::load(path);
+  ref.bind(ch.mesh, ch.skeleton);
+
+  // Engine-style arrays: k influences per vertex (zero-padded), TRS rest pose.
+  const Skeleton& s = ch.skeleton;
+  const std::int32_t J = s.num_joints();
+  std::vector<const char*> names;
+  std::vector<float> rest, ibm;
+  for (std::int32_t j = 0; j < J; ++j) {
+    names.push_back(s.names[std::size_t(j)].c_str());
+    const Transform& t = s.rest_local[std::size_t(j)];
+    rest.insert(rest.end(), t.translation.begin(), t.translation.end());
+    rest.insert(rest.end(), t.rotation.begin(), t.rotation.end());
+    rest.insert(rest.end(), t.scale.begin(), t.scale.end());
+    ibm.insert(ibm.end(), s.inverse_bind[std::size_t(j)].begin(), s.inverse_bind[std::size_t(j)].end());
+  }
+  const std::int64_t n = ch.mesh.num_vertices(), k = ch.mesh.weights.max_influences();
+  std::vector<std::int32_t> joints(std::size_t(n * k), 0);
+  std::vector<float> weights(std::size_t(n * k), 0.f);
+  for (std::int64_t v = 0; v < n; ++v)
+    for (std::int64_t e = ch.mesh.weights.ptr[std::size_t(v)], i = 0; e < ch.mesh.weights.ptr[std::size_t(v) + 1];
+         ++e, ++i) {
+      joints[std::size_t(v * k + i)] = ch.mesh.weights.joint[std::size_t(e)];
+      weights[std::size_t(v * k + i)] = ch.mesh.weights.weight[std::size_t(e)];
+    }
+  const gatcore_mesh mesh{n, ch.mesh.positions.data(), ch.mesh.num_triangles(), ch.mesh.triangles.data(), std::int32_t(k),
+                          joints.data(), weights.data()};
+  const gatcore_skeleton sk{J, names.data(), s.parents.data(), rest.data(), ibm.data()};
+  gatcore_deformer* d = nullptr;
+  REQUIRE(gatcore_deformer_load(path.c_str(), GATCORE_DEVICE_CPU, &d) == GATCORE_OK);
+  REQUIRE(gatcore_deformer_bind(d, &mesh, &sk, nullptr, 0) == GATCORE_OK);
+  for (int f = 0; f < 2; ++f) {
+    const std::vector<float> g = globals_of(s, test_pose(s, f));
+    std::vector<float> a(std::size_t(3 * n)), b(a.size()), na(a.size()), nb(a.size());
+    ref.deform(g, a, na);
+    REQUIRE(gatcore_deformer_deform(d, g.data(), J, b.data(), nb.data(), n) == GATCORE_OK);
+    CHECK(a == b);
+    CHECK(na == nb);
+  }
+  CHECK(gatcore_deformer_deform(d, nullptr, J, nullptr, nullptr, n) == GATCORE_ERROR_INVALID_ARGUMENT);
+  CHECK_THAT(std::string(gatcore_last_error()), Contains("must not be NULL"));
+  gatcore_deformer_destroy(d);
+}
+
+// Writes the checkpoints the C test (tests/c_api_test.c) loads: a corrective
+// and a skin-weight model on its tube's bones (hips, spine, chest).
+TEST_CASE("C API test fixture", "[.c_api_fixture]") {
+  const char* model = std::getenv("GATCORE_C_API_MODEL");
+  const char* wmodel = std::getenv("GATCORE_C_API_WEIGHTS");
+  REQUIRE(model);
+  REQUIRE(wmodel);
+  const std::vector<std::string> bones = {"hips", "spine", "chest"};
+  std::filesystem::copy_file(corrective_checkpoint("densegats", bones, "1,4", 2), model,
+                             std::filesystem::copy_options::overwrite_existing);
+  models::ModelConfig wc = models::ModelConfig::defaults("neuroskinning", 9, 3);
+  wc.stage1 = {16}, wc.gc_dims = {8, 8, 8}, wc.global_mlp = {32}, wc.classifier = {32}, wc.gc_pool = {4, 6, 8};
+  auto wm = models::make_model(wc, 1);
+  models::save_checkpoint(wmodel, *wm, models::Normaliser{}, nullptr,
+                          {{"features", "neuroskinning"}, {"skeleton", joined(bones)}});
+}
+
+TEST_CASE("runtime::Deformer on Vulkan matches the CPU", "[runtime][vulkan]") {
+  if (!vkt::ready()) return;
+  const Character ch = humanoid(3);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  for (const char* name : {"densegats", "origat"}) {
+    INFO("model " << name);
+    const std::string path = corrective_checkpoint(name, bones, "1,4", 2);
+    runtime::Deformer cpu = runtime::Deformer::load(path);
+    runtime::Deformer vk = runtime::Deformer::load(path, runtime::DeviceChoice::vulkan);
+    CHECK(vk.device() == Device::vulkan);
+    cpu.bind(ch.mesh, ch.skeleton);
+    vk.bind(ch.mesh, ch.skeleton);
+    const std::size_t n3 = std::size_t(3 * cpu.num_vertices());
+    std::vector<float> a(n3), b(n3), la(n3), lb(n3);
+    for (int f = 0; f < 2; ++f) {
+      const std::vector<float> g = globals_of(ch.skeleton, test_pose(ch.skeleton, f));
+      cpu.deform(g, a, {}, la);
+      vk.deform(g, b, {}, lb);
+      CHECK(la == lb);  // LBS and features are on the CPU either way
+      float diff = 0, corr = 0;
+      for (std::size_t i = 0; i < n3; ++i) {
+        diff = std::max(diff, std::abs(a[i] - b[i]));
+        corr = std::max(corr, std::abs(a[i] - la[i]));
+      }
+      CHECK(corr > 0.f);
+      float lo = ch.mesh.positions[1], hi = lo;
+      for (std::size_t i = 1; i < ch.mesh.positions.size(); i += 3)
+        lo = std::min(lo, ch.mesh.positions[i]), hi = std::max(hi, ch.mesh.positions[i]);
+      CHECK(diff < 1e-4f * (hi - lo));  // as test_character_export's deform test: device kernels round differently
+    }
+  }
+}
