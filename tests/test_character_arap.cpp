@@ -6,10 +6,10 @@
 
 #include <cmath>
 
-#include "gatcore/character/arap.hpp"
-#include "gatcore/character/deform.hpp"
-#include "gatcore/character/pose.hpp"
-#include "gatcore/character/procedural.hpp"
+#include "gatcore/character/deform/arap.hpp"
+#include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/rig/pose.hpp"
+#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore;

@@ -20,11 +20,12 @@
 #include <string>
 #include <vector>
 
-#include "gatcore/character/arap.hpp"
-#include "gatcore/character/character_model.hpp"
-#include "gatcore/character/corrective.hpp"
-#include "gatcore/character/import.hpp"
-#include "gatcore/character/motion.hpp"
+#include "gatcore/character/deform/arap.hpp"
+#include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/inference/corrective.hpp"
+#include "gatcore/character/io/import.hpp"
+#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/rig/motion.hpp"
 #include "gatcore/models/checkpoint.hpp"
 
 using namespace gatcore;

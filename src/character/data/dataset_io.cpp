@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -61,7 +62,29 @@ void save_dataset(const std::string& path, const DatasetDescription& d) {
   if (d.joint_limits) j["joint_limits"] = nlohmann::json::parse(joint_limits_json(*d.joint_limits));
   j["motion_stride"] = d.motion_stride;
   j["seed"] = d.seed;
-  j["reference_deformer"] = {{"name", "delta_mush"}, {"iterations", d.delta_mush.iterations}, {"step", d.delta_mush.step}};
+  if (d.reference == ReferenceKind::arap)
+    j["reference_deformer"] = {{"name", "arap"}, {"iterations", d.arap.iterations}, {"handle_weight", d.arap.handle_weight}};
+  else
+    j["reference_deformer"] = {{"name", "delta_mush"}, {"iterations", d.delta_mush.iterations}, {"step", d.delta_mush.step}};
+  if (!d.targets.empty()) {
+    nlohmann::json targets = nlohmann::json::array();
+    for (const FileTargetSource& t : d.targets) {
+      // Each file (and a BVH motion) relative to this file, like the characters.
+      std::vector<std::string> files;
+      std::stringstream ss(t.file);
+      for (std::string f; std::getline(ss, f, ',');)
+        if (!f.empty()) files.push_back(f);
+      std::string joined;
+      for (const std::string& f : relative_to(files, path)) joined += (joined.empty() ? "" : ",") + f;
+      const bool clip = t.motion == "clip" || t.motion.rfind("clip:", 0) == 0;
+      nlohmann::json tj = {{"character", t.character}, {"file", joined},
+                           {"motion", clip ? t.motion : relative_to({t.motion}, path)[0]}};
+      if (!t.animation.empty()) tj["animation"] = t.animation;
+      if (t.first_frame) tj["first_frame"] = *t.first_frame;
+      targets.push_back(tj);
+    }
+    j["targets"] = targets;
+  }
   j["subsample"] = d.subsample;
   j["distortion_scales"] = d.distortion_scales;
   j["validation"] = d.validation;
@@ -103,10 +126,32 @@ DatasetDescription load_dataset(const std::string& path) {
     d.motion_stride = j.at("motion_stride").get<int>();
     d.seed = j.at("seed").get<std::uint32_t>();
     const auto& rd = j.at("reference_deformer");
-    GATCORE_CHECK(rd.at("name").get<std::string>() == "delta_mush", path, ": unknown reference deformer ",
-                  rd.at("name").dump());
-    d.delta_mush.iterations = rd.at("iterations").get<int>();
-    d.delta_mush.step = rd.at("step").get<float>();
+    d.reference = parse_reference_kind(rd.at("name").get<std::string>(), path + ": field \"reference_deformer\"");
+    GATCORE_CHECK(d.reference != ReferenceKind::files, path,
+                  ": \"reference_deformer\" is a built-in deformer (delta_mush or arap); file targets go in \"targets\"");
+    if (d.reference == ReferenceKind::arap) {
+      d.arap.iterations = rd.at("iterations").get<int>();
+      d.arap.handle_weight = rd.at("handle_weight").get<float>();
+    } else {
+      d.delta_mush.iterations = rd.at("iterations").get<int>();
+      d.delta_mush.step = rd.at("step").get<float>();
+    }
+    if (j.contains("targets"))
+      for (const auto& tj : j.at("targets")) {
+        FileTargetSource t;
+        t.character = tj.at("character").get<std::int32_t>();
+        std::vector<std::string> files;
+        std::stringstream ss(tj.at("file").get<std::string>());
+        for (std::string f; std::getline(ss, f, ',');)
+          if (!f.empty()) files.push_back(f);
+        GATCORE_CHECK(!files.empty(), path, ": a target has no file");
+        for (const std::string& f : resolve(files, path)) t.file += (t.file.empty() ? "" : ",") + f;
+        const std::string m = tj.at("motion").get<std::string>();
+        t.motion = m == "clip" || m.rfind("clip:", 0) == 0 ? m : resolve({m}, path)[0];
+        t.animation = tj.value("animation", "");
+        if (tj.contains("first_frame")) t.first_frame = tj.at("first_frame").get<double>();
+        d.targets.push_back(std::move(t));
+      }
     d.subsample = j.at("subsample").get<std::int64_t>();
     // Absent in datasets written before the field: the paper's features only.
     if (j.contains("distortion_scales")) {
@@ -121,6 +166,12 @@ DatasetDescription load_dataset(const std::string& path) {
     const auto n = static_cast<std::int32_t>(d.characters.size());
     for (const auto* v : {&d.split.train, &d.split.validation, &d.split.test})
       for (std::int32_t c : *v) GATCORE_CHECK(c >= 0 && c < n, path, ": split names character ", c, " of ", n);
+    std::vector<char> has_target(std::size_t(n), 0);
+    for (const FileTargetSource& t : d.targets) {
+      GATCORE_CHECK(t.character >= 0 && t.character < n, path, ": a target names character ", t.character, " of ", n);
+      GATCORE_CHECK(!has_target[std::size_t(t.character)], path, ": character ", t.character, " has two targets");
+      has_target[std::size_t(t.character)] = 1;
+    }
     return d;
   } catch (const nlohmann::json::exception& e) {
     throw InvalidArgument(detail::cat(path, ": bad dataset description: ", e.what()));
@@ -165,6 +216,19 @@ std::vector<SampleTask> dataset_tasks(const DatasetDescription& d, const std::ve
       t.first = count < n ? static_cast<std::int64_t>(rng() % static_cast<std::uint32_t>(n - count + 1)) : 0;
       tasks.push_back(std::move(t));
     };
+    // File targets: their frames only, every motion_stride-th, from a phase
+    // that moves with the epoch (so `stride` epochs see every frame).
+    if (const std::int32_t F = pc.reference ? pc.reference->num_frames() : 0; F > 0) {
+      GATCORE_CHECK(static_cast<std::int32_t>(pc.target_poses.size()) == F, "dataset_tasks: character ", c, " has ",
+                    F, " target frames but ", pc.target_poses.size(), " poses");
+      const std::int32_t stride = std::min(d.motion_stride, F);
+      std::int32_t index = 0;
+      for (std::int32_t k = epoch % stride; k < F; k += stride) {
+        add(pc.target_poses[std::size_t(k)], index++);
+        tasks.back().target_frame = k;
+      }
+      continue;
+    }
     const auto limits = d.joint_limits ? d.joint_limits->limits_for(pc.character.skeleton)
                                        : uniform_limits(pc.character.skeleton, d.pose_angle);
     for (int p = 0; p < d.random_poses; ++p) add(random_pose(pc.character.skeleton, pc.rest, limits, rng), p);

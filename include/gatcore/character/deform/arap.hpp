@@ -29,7 +29,7 @@
 #include <span>
 #include <vector>
 
-#include "gatcore/character/mesh.hpp"
+#include "gatcore/character/rig/mesh.hpp"
 
 namespace gatcore::character {
 

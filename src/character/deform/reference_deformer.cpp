@@ -1,4 +1,4 @@
-#include "gatcore/character/reference_deformer.hpp"
+#include "gatcore/character/deform/reference_deformer.hpp"
 
 #include "gatcore/error.hpp"
 

@@ -1,4 +1,4 @@
-#include "gatcore/character/arap.hpp"
+#include "gatcore/character/deform/arap.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 
-#include "gatcore/character/parallel.hpp"
+#include "gatcore/character/rig/parallel.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {

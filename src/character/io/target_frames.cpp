@@ -1,12 +1,12 @@
-#include "gatcore/character/target_frames.hpp"
+#include "gatcore/character/io/target_frames.hpp"
 
 #include <cmath>
 #include <map>
 #include <sstream>
 
-#include "gatcore/character/bake.hpp"
+#include "gatcore/character/io/bake.hpp"
 #include "gatcore/error.hpp"
-#include "src/character/gltf_util.hpp"
+#include "src/character/io/gltf_util.hpp"
 
 namespace gatcore::character {
 

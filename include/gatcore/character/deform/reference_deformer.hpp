@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "gatcore/character/arap.hpp"
-#include "gatcore/character/deform.hpp"
+#include "gatcore/character/deform/arap.hpp"
+#include "gatcore/character/deform/deform.hpp"
 
 namespace gatcore::character {
 

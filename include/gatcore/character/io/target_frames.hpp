@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "gatcore/character/character.hpp"
+#include "gatcore/character/rig/character.hpp"
 
 namespace gatcore::character {
 
