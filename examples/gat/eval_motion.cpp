@@ -35,14 +35,16 @@ namespace {
 
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
-               "usage: gat eval --motion M.bvh [--motion ...] --data DATASET [--model [LABEL=]FILE ...]\n"
+               "usage: gat eval --motion M.bvh [--motion ...] | --targets  --data DATASET [--model [LABEL=]FILE ...]\n"
                "                [--part test|validation|train] [--stride K] [--json OUT] [--markdown OUT]\n"
                "                [--errormaps DIR] [--errormap-frames N] [--errormap-size PX]\n"
                "                [--loss-curve LABEL=TRAIN_LOG ...] [--cm-per-unit X] [--linear-probe]\n"
                "  Evaluates displacement models (LBS + predicted offsets) and the LBS and DQS baselines\n"
-               "  against the dataset's reference deformer (Delta Mush on LBS) on every K-th frame\n"
+               "  against the dataset's reference deformer (Delta Mush or ARAP on LBS) on every K-th frame\n"
                "  (default 1: all frames) of each motion retargeted onto each character of the part:\n"
-               "  per-vertex distance mean / max / min per character and motion, per character, overall.\n"
+               "  per-vertex distance mean / p99 / max / min per character and motion, per character, overall.\n"
+               "  Characters with file targets (gat dataset build --target) are evaluated on their frames\n"
+               "  instead (gat eval --targets --data D: no --motion needed).\n"
                "  --linear-probe   also evaluates the least-squares linear map of the models' input columns\n"
                "                   to the target, fitted on the training characters' epoch-0 poses (the\n"
                "                   linear probe a network has to beat; gat train --linear-skip starts there)\n"
@@ -156,6 +158,7 @@ int gat::eval_motion(int argc, char** argv) {
       linear_probe = true;
       continue;
     }
+    if (a == "--targets") continue;  // file targets are evaluated whenever a character has them
     if (i + 1 >= argc) {
       std::fprintf(stderr, "gat eval: unknown or incomplete option '%s'\n", a.c_str());
       return usage(2);
@@ -192,7 +195,7 @@ int gat::eval_motion(int argc, char** argv) {
       return usage(2);
     }
   }
-  if (data.empty() || motion_paths.empty()) {
+  if (data.empty()) {
     std::fprintf(stderr, "gat eval: --motion needs --data DATASET\n");
     return usage(2);
   }
@@ -275,9 +278,20 @@ int gat::eval_motion(int argc, char** argv) {
     const double to_world = 1.0 / double(pc.norm.scale);
     const std::int64_t n = pc.character.mesh.num_vertices();
     Row chrow{character_label(entry), "all", 0, n, cm, std::vector<Acc>(K)};
-    for (std::size_t mi = 0; mi < motions.size(); ++mi) {
-      const Clip clip = retarget(motions[mi], pc.character.skeleton, mat4_identity());
-      Row row{character_label(entry), motions[mi].name, 0, n, cm, std::vector<Acc>(K)};
+    // A character with file targets is evaluated on their frames (the poses
+    // of the motion that drove them); the others on the --motion BVHs.
+    const bool files = pc.reference && pc.reference->num_frames() > 0;
+    std::vector<std::string> seq_names;
+    if (files) {
+      for (const FileTargetSource& t : td.description.targets)
+        if (t.character == c) seq_names.push_back(t.file);
+    } else {
+      for (const Motion& m : motions) seq_names.push_back(m.name);
+    }
+    for (std::size_t mi = 0; mi < seq_names.size(); ++mi) {
+      const Clip clip = files ? Clip{seq_names[mi], 30.0f, pc.target_poses}
+                              : retarget(motions[mi], pc.character.skeleton, mat4_identity());
+      Row row{character_label(entry), seq_names[mi], 0, n, cm, std::vector<Acc>(K)};
       std::vector<std::size_t> frames;
       for (std::size_t f = 0; f < clip.frames.size(); f += std::size_t(stride)) frames.push_back(f);
       std::vector<std::size_t> map_at;
@@ -288,7 +302,7 @@ int gat::eval_motion(int argc, char** argv) {
       for (std::size_t f : frames) {
         const Pose& pose = clip.frames[f];
         DenseGatsSample raw;
-        const Sample s = densegats_full_sample(td, c, pose, &raw);
+        const Sample s = densegats_full_sample(td, c, pose, &raw, files ? std::int32_t(f) : -1);
         // Reference (Delta Mush) and DQS in normalised units.
         const std::vector<Mat4> g = global_transforms(pc.character.skeleton, pose);
         std::vector<Mat4> S(g.size());
@@ -342,11 +356,11 @@ int gat::eval_motion(int argc, char** argv) {
           std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(q), sorted.end());
           ro.max_error = std::max(sorted[q], 1e-12f);
           for (std::size_t k = 0; k < K; ++k) {
-            std::string name = row.character + "_" + stem(motions[mi].name) + "_f" + std::to_string(f) + "_" + methods[k];
+            std::string name = row.character + "_" + stem(seq_names[mi]) + "_f" + std::to_string(f) + "_" + methods[k];
             std::replace(name.begin(), name.end(), '/', '_');
             write_png((fs::path(map_dir) / (name + ".png")).string(),
                       render_error_map(world, pc.character.mesh.triangles, err[k], ro));
-            maps.push_back({{"file", name + ".png"}, {"character", row.character}, {"motion", motions[mi].name},
+            maps.push_back({{"file", name + ".png"}, {"character", row.character}, {"motion", seq_names[mi]},
                             {"frame", f}, {"method", methods[k]}, {"colour_scale_top", ro.max_error},
                             {"colour_scale_top_cm", cm > 0 ? ro.max_error * cm : 0.0}});
           }
@@ -395,8 +409,13 @@ int gat::eval_motion(int argc, char** argv) {
   j["dataset_hash"] = td.hash;
   j["part"] = part;
   j["stride"] = stride;
-  j["reference"] = {{"name", "delta_mush"}, {"iterations", td.description.delta_mush.iterations},
-                    {"step", td.description.delta_mush.step}};
+  if (td.description.reference == ReferenceKind::arap)
+    j["reference"] = {{"name", "arap"}, {"iterations", td.description.arap.iterations},
+                      {"handle_weight", td.description.arap.handle_weight}};
+  else
+    j["reference"] = {{"name", "delta_mush"}, {"iterations", td.description.delta_mush.iterations},
+                      {"step", td.description.delta_mush.step}};
+  if (!td.description.targets.empty()) j["reference"]["file_targets"] = td.description.targets.size();
   j["motions"] = motion_paths;
   j["methods"] = methods;
   for (const auto& m : models_) {
@@ -431,7 +450,7 @@ int gat::eval_motion(int argc, char** argv) {
   std::ostringstream md;
   const char* u = all_cm ? "cm" : "units";
   md << "Overall (" << per_char.size() << " " << part << " characters, every " << stride
-     << (stride == 1 ? "" : "th") << " frame of " << motions.size() << " motion(s); per-vertex distance to Delta Mush, "
+     << (stride == 1 ? "" : "th") << " frame of " << motions.size() << " motion(s) or file targets; per-vertex distance to the reference, "
      << u << "; p99: the 99th percentile, within 0.6 %):\n\n| method | mean | p99 | max | min |\n|---|---:|---:|---:|---:|\n";
   for (std::size_t k = 0; k < K; ++k) {
     const Acc& a = all_cm ? overall_cm[k] : overall[k];

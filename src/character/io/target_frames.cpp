@@ -17,8 +17,9 @@ std::vector<float> to_welded(const Character& ch, const std::vector<double>& fil
   const std::int64_t n = ch.mesh.num_vertices();
   std::vector<double> sum(static_cast<std::size_t>(3 * n), 0.0);
   std::vector<int> count(static_cast<std::size_t>(n), 0);
-  for (std::size_t i = 0; i < ch.welded_from_file.size(); ++i) {
-    const std::int32_t v = ch.welded_from_file[i];
+  const std::size_t nfile = ch.welded_from_file.empty() ? std::size_t(n) : ch.welded_from_file.size();
+  for (std::size_t i = 0; i < nfile; ++i) {
+    const std::int32_t v = ch.welded_from_file.empty() ? std::int32_t(i) : ch.welded_from_file[i];
     for (int c = 0; c < 3; ++c) sum[3 * std::size_t(v) + c] += file_xyz[3 * i + c];
     ++count[std::size_t(v)];
   }
@@ -39,8 +40,9 @@ std::string joined(const std::vector<std::string>& paths) {
 
 TargetFrames read_point_cache_frames(const Character& ch, const std::vector<std::string>& paths) {
   GATCORE_CHECK(!paths.empty(), ch.name, ": no point cache given");
-  const std::int64_t nfile = ch.num_file_vertices();
-  GATCORE_CHECK(nfile > 0, ch.name, ": the character has no file vertices to match a point cache against");
+  // A character built in memory (procedural) has no file: its vertices are the points.
+  const std::int64_t nfile = ch.welded_from_file.empty() ? ch.mesh.num_vertices() : ch.num_file_vertices();
+  GATCORE_CHECK(nfile > 0, ch.name, ": the character has no vertices to match a point cache against");
   std::vector<PointCache> caches;
   std::int64_t total = 0;
   for (const std::string& p : paths) {
@@ -48,8 +50,8 @@ TargetFrames read_point_cache_frames(const Character& ch, const std::vector<std:
     total += caches.back().num_points;
   }
   const std::string what = joined(paths);
-  GATCORE_CHECK(total == nfile, what, ": ", total, " points", paths.size() > 1 ? " in all" : "", ", but ", ch.name,
-                " has ", nfile, " file vertices (the points of every primitive, concatenated",
+  GATCORE_CHECK(total == nfile, what, ": ", total, " points", paths.size() > 1 ? " in all" : "", ", but '", ch.name,
+                "' has ", nfile, " file vertices (the points of every primitive, concatenated",
                 paths.size() > 1 ? ", one cache per mesh or primitive in the file's order)" : ")");
   if (paths.size() > 1) {
     // Each cache must cover whole primitives: its first point starts one.
