@@ -7,12 +7,14 @@
 // character it times, per frame: LBS, Delta Mush on LBS (the default
 // reference, 10 x 0.5), ARAP on LBS (arap.hpp defaults: 10 iterations,
 // handles at dominant weight >= 0.95) and, with MODEL, DenseGATs' corrective
-// frame (features + inference, corrective.hpp). It prints the median
-// milliseconds of each, the one-off ARAP binding (factorisation) time, the
+// frame (features + inference, corrective.hpp). It prints the median CPU
+// milliseconds of each (process CPU time, so a loaded machine does not
+// inflate it; OMP_NUM_THREADS=1 for one core), the one-off ARAP binding (factorisation) time, the
 // mean distance of each reference to LBS (the size of what a network learns)
 // and ARAP's energy before and after its iterations.
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -33,8 +35,14 @@ using namespace gatcore::character;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+// Process CPU time, not wall time: on a shared, loaded machine wall time
+// measures the other processes too. Run with OMP_NUM_THREADS=1 for the cost
+// of one core (with more threads it is the sum over the threads).
+struct Clock {
+  using time_point = std::clock_t;
+  static time_point now() { return std::clock(); }
+};
+double ms_since(Clock::time_point t) { return 1000.0 * double(std::clock() - t) / CLOCKS_PER_SEC; }
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -105,7 +113,7 @@ int main(int argc, char** argv) {
     std::printf("reference_cost: %s, %lld vertices (%lld ARAP handles), %d frames of %s\n", argv[1],
                 static_cast<long long>(w.mesh.num_vertices()), static_cast<long long>(arap.num_handles()), F, argv[2]);
     std::printf("  ARAP binding (cotangent weights + factorisation, once per character): %.1f ms\n", bind_ms);
-    std::printf("  per frame (median): LBS %.2f ms, Delta Mush %.2f ms, ARAP (%d iterations) %.2f ms",
+    std::printf("  CPU time per frame (median): LBS %.2f ms, Delta Mush %.2f ms, ARAP (%d iterations) %.2f ms",
                 median(t_lbs), median(t_dm), arap.params.iterations, median(t_arap));
     if (cd) std::printf(", DenseGATs (%s: features + inference) %.2f ms", lm.model->config().name.c_str(), median(t_net));
     std::printf("\n  mean distance to LBS (world units): Delta Mush %.5f, ARAP %.5f; ARAP energy LBS %.4g -> %.4g\n",
