@@ -11,6 +11,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -45,6 +46,9 @@ int usage(int rc) {
                "  per-vertex distance mean / p99 / max / min per character and motion, per character, overall.\n"
                "  Characters with file targets (gat dataset build --target) are evaluated on their frames\n"
                "  instead (gat eval --targets --data D: no --motion needed).\n"
+               "  --max-limit-excess DEG  leaves out frames whose pose leaves the dataset's random-pose joint\n"
+               "                   limits (what training covered) by more than DEG degrees on some joint axis\n"
+               "                   (rig/joint_limits.hpp pose_limit_excess; counted as frames_excluded)\n"
                "  --linear-probe   also evaluates the least-squares linear map of the models' input columns\n"
                "                   to the target, fitted on the training characters' epoch-0 poses (the\n"
                "                   linear probe a network has to beat; gat train --linear-skip starts there)\n"
@@ -151,6 +155,7 @@ int gat::eval_motion(int argc, char** argv) {
   long stride = 1, map_frames = 2, map_size = 320;
   double cm_per_unit = -1;
   bool linear_probe = false;
+  double max_excess_deg = -1;  // < 0: every frame
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") return usage(0);
@@ -179,6 +184,12 @@ int gat::eval_motion(int argc, char** argv) {
       model_args.emplace_back(eq == std::string::npos ? std::string() : v.substr(0, eq),
                               eq == std::string::npos ? v : v.substr(eq + 1));
     } else if (a == "--stride") stride = integer(1, 1000000);
+    else if (a == "--max-limit-excess") {
+      char* end = nullptr;
+      max_excess_deg = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end || !(max_excess_deg >= 0) || !std::isfinite(max_excess_deg))
+        throw InvalidArgument("gat eval: --max-limit-excess expects degrees >= 0, got '" + v + "'");
+    }
     else if (a == "--json") json_out = v;
     else if (a == "--markdown") md_out = v;
     else if (a == "--errormaps") map_dir = v;
@@ -265,6 +276,7 @@ int gat::eval_motion(int argc, char** argv) {
     std::int64_t frames = 0, vertices = 0;
     double cm = 0;
     std::vector<Acc> acc;
+    std::int64_t excluded = 0;  // frames left out (--max-limit-excess)
   };
   std::vector<Row> table, per_char;
   for (std::int32_t c : chars) {
@@ -288,6 +300,12 @@ int gat::eval_motion(int argc, char** argv) {
     } else {
       for (const Motion& m : motions) seq_names.push_back(m.name);
     }
+    // The rule for poses outside what training covered (--max-limit-excess):
+    // frames whose joints leave the dataset's random-pose limits by more
+    // than the given angle are left out (and counted).
+    const std::vector<JointLimit> limits = td.description.joint_limits
+                                               ? td.description.joint_limits->limits_for(pc.character.skeleton)
+                                               : uniform_limits(pc.character.skeleton, td.description.pose_angle);
     for (std::size_t mi = 0; mi < seq_names.size(); ++mi) {
       const Clip clip = files ? Clip{seq_names[mi], 30.0f, pc.target_poses}
                               : retarget(motions[mi], pc.character.skeleton, mat4_identity());
@@ -301,6 +319,11 @@ int gat::eval_motion(int argc, char** argv) {
       const auto tc = std::chrono::steady_clock::now();
       for (std::size_t f : frames) {
         const Pose& pose = clip.frames[f];
+        if (max_excess_deg >= 0 &&
+            pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits).radians > max_excess_deg * std::numbers::pi / 180.0) {
+          ++row.excluded;
+          continue;
+        }
         DenseGatsSample raw;
         const Sample s = densegats_full_sample(td, c, pose, &raw, files ? std::int32_t(f) : -1);
         // Reference (Delta Mush) and DQS in normalised units.
@@ -366,14 +389,16 @@ int gat::eval_motion(int argc, char** argv) {
           }
         }
       }
-      std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%.1f s):", row.character.c_str(),
-                  stem(row.motion).c_str(), static_cast<long long>(row.frames), static_cast<long long>(n),
+      std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%lld outside the limits left out, %.1f s):",
+                  row.character.c_str(), stem(row.motion).c_str(), static_cast<long long>(row.frames),
+                  static_cast<long long>(n), static_cast<long long>(row.excluded),
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
       for (std::size_t k = 0; k < K; ++k) std::printf("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
       std::printf("\n");
       std::fflush(stdout);
       for (std::size_t k = 0; k < K; ++k) chrow.acc[k].add(row.acc[k]);
       chrow.frames += row.frames;
+      chrow.excluded += row.excluded;
       table.push_back(row);
     }
     for (std::size_t k = 0; k < K; ++k) {
@@ -409,6 +434,7 @@ int gat::eval_motion(int argc, char** argv) {
   j["dataset_hash"] = td.hash;
   j["part"] = part;
   j["stride"] = stride;
+  j["max_limit_excess_deg"] = max_excess_deg;
   if (td.description.reference == ReferenceKind::arap)
     j["reference"] = {{"name", "arap"}, {"iterations", td.description.arap.iterations},
                       {"handle_weight", td.description.arap.handle_weight}};
@@ -429,6 +455,7 @@ int gat::eval_motion(int argc, char** argv) {
   for (const auto& group : {&table, &per_char})
     for (const Row& r : *group) {
       nlohmann::json rj = {{"character", r.character}, {"motion", r.motion}, {"frames", r.frames},
+                           {"frames_excluded", r.excluded},
                            {"vertices", r.vertices}, {"cm_per_unit", r.cm}};
       for (std::size_t k = 0; k < K; ++k) rj["methods"][methods[k]] = stats_json(r.acc[k], r.cm);
       rows.push_back(rj);
@@ -457,6 +484,12 @@ int gat::eval_motion(int argc, char** argv) {
     const double p99 = all_cm ? (common_cm > 0 ? overall[k].quantile(0.99) * common_cm : -1.0) : overall[k].quantile(0.99);
     md << "| " << methods[k] << " | " << fmt(a.mean()) << " | " << (p99 >= 0 ? fmt(p99) : std::string("-")) << " | "
        << fmt(a.max) << " | " << fmt(a.min) << " |\n";
+  }
+  if (max_excess_deg >= 0) {
+    std::int64_t ex = 0, kept = 0;
+    for (const Row& r : per_char) ex += r.excluded, kept += r.frames;
+    md << "\nFrames whose pose leaves the dataset's random-pose joint limits by more than " << max_excess_deg
+       << " degrees are left out: " << ex << " of " << ex + kept << ".\n";
   }
   md << "\nPer character and motion (mean / p99 / max / min, " << u << "):\n\n| character | motion | frames | vertices |";
   for (const auto& m : methods) md << " " << m << " |";
