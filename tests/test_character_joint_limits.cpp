@@ -253,3 +253,31 @@ TEST_CASE("the humanoid table bends Quaternius knees backwards and elbows forwar
     }
   }
 }
+
+TEST_CASE("pose_limit_excess: zero within the limits, the overshoot outside them, roots ignored", "[character][limits]") {
+  const Character ch = procedural_character({});
+  const Pose rest = bind_pose(ch.skeleton);
+  const std::vector<JointLimit> limits = JointLimitTable::default_humanoid().limits_for(ch.skeleton);
+  std::mt19937 rng(5);
+  for (int i = 0; i < 20; ++i) {
+    const Pose p = random_pose(ch.skeleton, rest, limits, rng);
+    CHECK(pose_limit_excess(ch.skeleton, rest, p, limits).radians < 1e-4f);
+  }
+  // One non-root joint turned 0.3 rad past its upper X limit.
+  std::int32_t j = -1;
+  for (std::int32_t k = 0; k < ch.skeleton.num_joints() && j < 0; ++k)
+    if (ch.skeleton.parents[std::size_t(k)] >= 0 && limits[std::size_t(k)].hi[0] < 1.0f) j = k;
+  REQUIRE(j >= 0);
+  Pose p = rest;
+  p.local[std::size_t(j)].rotation =
+      quat_mul(rest.local[std::size_t(j)].rotation, quat_from_axis_angle({1, 0, 0}, limits[std::size_t(j)].hi[0] + 0.3f));
+  const LimitExcess e = pose_limit_excess(ch.skeleton, rest, p, limits);
+  CHECK(e.radians == Approx(0.3f).margin(1e-4));
+  CHECK(e.joint == j);
+  CHECK(e.axis == 0);
+  // The root's own rotation (the motion's root movement) does not count.
+  Pose moved = rest;
+  moved.local[0].rotation = quat_mul(quat_from_axis_angle({0, 1, 0}, 2.0f), rest.local[0].rotation);
+  CHECK(pose_limit_excess(ch.skeleton, rest, moved, limits).radians == 0.0f);
+  CHECK_THROWS_WITH(pose_limit_excess(ch.skeleton, rest, p, {}), Contains("0 limits"));
+}

@@ -126,8 +126,7 @@ void compare(const Run& c, const Run& g, float lr) {
   }
 }
 
-void parity(const std::string& name) {
-  const ModelConfig c = reduced(name);
+void parity(const ModelConfig& c) {
   const int epochs = 4;
   const Run cpu = train(c, Device::cpu, epochs);
   const Run vk = train(c, Device::vulkan, epochs);
@@ -140,11 +139,20 @@ void parity(const std::string& name) {
   }
 }
 
+void parity(const std::string& name) { parity(reduced(name)); }
+
 }  // namespace
 
 TEST_CASE("vulkan trainer: reduced DenseGATs trains like the CPU", "[vulkan]") {
   if (!vkt::ready()) return;
   parity("densegats");
+}
+
+TEST_CASE("vulkan trainer: reduced DenseGATs with the linear skip trains like the CPU", "[vulkan]") {
+  if (!vkt::ready()) return;
+  ModelConfig c = reduced("densegats");
+  c.linear_skip = true;
+  parity(c);
 }
 
 TEST_CASE("vulkan trainer: reduced NeuroSkinning trains like the CPU", "[vulkan]") {

@@ -13,10 +13,11 @@
 #   environment overrides (defaults per budget below):
 #     DG_MINUTES   training minutes per model (0: --epochs only)   DG_EPOCHS   epoch cap per model
 #     DG_MINUTES_<model>  (e.g. DG_MINUTES_densegats=40, '-' for '_'): that model's own budget
-#     DG_LONG_MINUTES  > 0: afterwards each of DG_LONG_MODELS (default densegats densegats-l1) is resumed for
+#     DG_LONG_MINUTES  > 0: afterwards each of DG_LONG_MODELS (default: the DenseGATs runs) is resumed for
 #                  that many more minutes into <label>-long.gcm and evaluated too (the equal-budget
 #                  comparison stays intact); DG_LONG_EPOCHS caps the extra epochs
-#     A DG_MODELS label ending in -l1 (densegats-l1) trains that model with gat train --loss l1.
+#     A DG_MODELS label ending in -l1 (densegats-l1) trains that model with gat train --loss l1;
+#     ending in -skip (densegats-l1-skip, densegats-skip) also with gat train --linear-skip.
 #     DG_DISTORTION  gat dataset build --distortion-scales (default 1,4,16; 'none': the paper's features only)
 #     DG_POSES     random poses per training character per epoch   DG_SUBSAMPLE vertices per sample
 #     DG_STRIDE    evaluate every k-th motion frame                DG_MOTIONS  test BVHs (space separated;
@@ -51,7 +52,7 @@ esac
 data="${GATCORE_DATA:-$root/../shared/data}"
 out="${out:-$root/build/experiments/densegats-$budget}"
 gat="${GAT:-$root/build/examples/gat}"
-: "${DG_MODELS:=densegats densegats-l1 densegats-noself densegats-nodense origat neuroskinning}"
+: "${DG_MODELS:=densegats densegats-l1 densegats-l1-skip densegats-noself densegats-nodense origat neuroskinning}"
 if [ -z "${DG_MOTIONS:-}" ]; then  # full budget: the jump too, when the data has it
   DG_MOTIONS="$data/motion/cmu/walk.bvh"
   if [ "$budget" = full ] && [ -f "$data/motion/cmu/jump.bvh" ]; then DG_MOTIONS+=" $data/motion/cmu/jump.bvh"; fi
@@ -90,9 +91,12 @@ for m in $DG_MODELS; do
   own="DG_MINUTES_${m//-/_}"
   minutes[$m]="${!own:-$DG_MINUTES}"
   echo "== train $m (${minutes[$m]} min)"
-  model="${m%-l1}"
+  model="${m%-skip}"
   extra=()
-  [ "$model" != "$m" ] && extra+=(--loss l1)
+  [ "$model" != "$m" ] && extra+=(--linear-skip)
+  base="$model"
+  model="${model%-l1}"
+  [ "$model" != "$base" ] && extra+=(--loss l1)
   [ "${minutes[$m]}" != 0 ] && extra+=(--minutes "${minutes[$m]}")
   [ "$model" = neuroskinning ] && extra+=(--task displacement)
   t0=$(date +%s)
@@ -107,7 +111,7 @@ done
 # models resumed for DG_LONG_MINUTES more (deterministic), as <label>-long.
 if [ -z "${DG_LONG_MODELS+x}" ]; then  # default: the DenseGATs runs among DG_MODELS
   DG_LONG_MODELS=""
-  for m in densegats densegats-l1; do [[ " $DG_MODELS " == *" $m "* ]] && DG_LONG_MODELS+=" $m"; done
+  for m in densegats densegats-l1 densegats-l1-skip; do [[ " $DG_MODELS " == *" $m "* ]] && DG_LONG_MODELS+=" $m"; done
 fi
 models_eval="$DG_MODELS"
 if [ "$DG_LONG_MINUTES" != 0 ]; then
@@ -129,8 +133,9 @@ fi
 # 3. Evaluation of every model and LBS / DQS on the test characters, every
 # DG_STRIDE-th frame of the test motions; error maps of DG_MAPFRAMES frames.
 echo "== evaluate"
+# The linear probe (the least-squares map of the same input columns) is a row of its own.
 eval_args=(--data "$out/dataset.json" --stride "$DG_STRIDE" --json "$out/report.json" --markdown "$out/eval.md"
-           --errormaps "$out/img" --errormap-frames "$DG_MAPFRAMES" --errormap-size 256)
+           --errormaps "$out/img" --errormap-frames "$DG_MAPFRAMES" --errormap-size 256 --linear-probe)
 for mo in $DG_MOTIONS; do eval_args+=(--motion "$mo"); done
 for m in $models_eval; do eval_args+=(--model "$m=$out/$m.gcm" --loss-curve "$m=$out/train_$m.log"); done
 t0=$(date +%s)

@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/data/file_targets.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
@@ -38,6 +39,17 @@ void usage(std::FILE* f) {
                "  --joint-limits FILE|humanoid  per-joint random-pose limits (JSON table, see\n"
                "             include/gatcore/character/rig/joint_limits.hpp; 'humanoid' = the built-in table);\n"
                "             recorded in the dataset; without it every joint axis gets +-pose-angle\n"
+               "  --reference delta_mush|arap  the built-in reference deformer the targets come from (default\n"
+               "             delta_mush); arap: as-rigid-as-possible on LBS (include/gatcore/character/deform/arap.hpp)\n"
+               "             with --arap-iterations I (10) and --arap-handle-weight W (0.95)\n"
+               "  --target CHARACTER TARGET MOTION  the character's own per-frame targets instead: TARGET a .pc2\n"
+               "             point cache (or comma-separated .pc2, one per mesh, in the file's order) or a glTF\n"
+               "             with a morph-target animation (what gat deform writes); MOTION the BVH that drove it,\n"
+               "             or clip:NAME (the character file's own animation). Target frame k is motion frame\n"
+               "             FIRST + k * (the .pc2 sample rate); FIRST: the .pc2 start frame, 0 for a glTF, or\n"
+               "             --target-first-frame F after the --target. --target-animation NAME: the glTF's\n"
+               "             morph animation (default 'deform'). Vertex and frame counts are checked; the character\n"
+               "             trains and evaluates on its target frames only (every --motion-stride-th per epoch)\n"
                "  --test-characters A,B,...  --validation-characters C,...  an explicit split instead of the\n"
                "             seeded one: each entry names one character by the end of its path (e.g.\n"
                "             modular_men/Punk.glb); the rest train\n"
@@ -122,6 +134,11 @@ int cmd_dataset(int argc, char** argv) {
   std::vector<std::string> inputs, motions;
   bool skip_bad = false;
   std::string test_list, validation_list;
+  struct TargetArg {
+    std::string character;
+    FileTargetSource src;
+  };
+  std::vector<TargetArg> targets;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> std::string {
@@ -150,6 +167,26 @@ int cmd_dataset(int argc, char** argv) {
     else if (a == "--distortion-scales") s.distortion_scales = parse_distortion_scales(value(), a);
     else if (a == "--skip-bad") skip_bad = true;
     else if (a == "--joint-limits") s.joint_limits = load_joint_limits(value());
+    else if (a == "--reference") {
+      s.reference = parse_reference_kind(value(), "--reference");
+      if (s.reference == ReferenceKind::files)
+        throw gatcore::InvalidArgument("--reference: file targets are given with --target CHARACTER TARGET MOTION");
+    } else if (a == "--arap-iterations") s.arap.iterations = static_cast<int>(number(1, 10000));
+    else if (a == "--arap-handle-weight") s.arap.handle_weight = static_cast<float>(number(1e-6, 1));
+    else if (a == "--target") {
+      TargetArg t;
+      t.character = value();
+      t.src.file = value();
+      t.src.motion = value();
+      inputs.push_back(t.character);
+      targets.push_back(std::move(t));
+    } else if (a == "--target-first-frame") {
+      if (targets.empty()) throw gatcore::InvalidArgument("--target-first-frame follows a --target");
+      targets.back().src.first_frame = number(-1e9, 1e9);
+    } else if (a == "--target-animation") {
+      if (targets.empty()) throw gatcore::InvalidArgument("--target-animation follows a --target");
+      targets.back().src.animation = value();
+    }
     else if (a == "--test-characters") test_list = value();
     else if (a == "--validation-characters") validation_list = value();
     else if (!a.empty() && a[0] == '-') throw gatcore::InvalidArgument("unknown option '" + a + "'");
@@ -162,6 +199,7 @@ int cmd_dataset(int argc, char** argv) {
   namespace fs = std::filesystem;
   std::vector<std::string> files;
   for (const auto& in : inputs) {
+    if (std::find(files.begin(), files.end(), in) != files.end()) continue;  // a --target character listed again
     if (fs::is_directory(in)) {
       std::vector<std::string> found;
       for (const auto& e : fs::directory_iterator(in)) {
@@ -192,6 +230,13 @@ int cmd_dataset(int argc, char** argv) {
     std::printf("  %-60s %6zu frames  %3d joints\n", m.c_str(), mo.clip.frames.size(), mo.skeleton.num_joints());
   }
   DatasetDescription d = describe_dataset(good, motions, s);
+  for (TargetArg& t : targets) {
+    const auto it = std::find(good.begin(), good.end(), t.character);
+    if (it == good.end())
+      throw gatcore::InvalidArgument("--target " + t.character + ": the character did not load (see above)");
+    t.src.character = static_cast<std::int32_t>(it - good.begin());
+    d.targets.push_back(t.src);
+  }
   if (!test_list.empty() || !validation_list.empty()) {
     // An explicit split: every listed entry must name exactly one loaded character.
     std::vector<int> role(good.size(), 0);  // 0 train, 1 validation, 2 test
@@ -225,11 +270,26 @@ int cmd_dataset(int argc, char** argv) {
     for (std::size_t c = 0; c < good.size(); ++c)
       (role[c] == 0 ? d.split.train : role[c] == 1 ? d.split.validation : d.split.test).push_back(static_cast<std::int32_t>(c));
   }
+  // File targets are checked (vertex counts, frame map, distance to LBS)
+  // before anything is written.
+  for (const FileTargetSource& t : d.targets) {
+    const Character file_character = load_dataset_character(d.characters[std::size_t(t.character)]);
+    PreparedCharacter pc = prepare_character(file_character, d.delta_mush, {});
+    const FileTargetSummary f = attach_file_targets(pc, file_character, t, out);
+    std::printf("  target %s: %d frames = motion frames %g + k x %g of %s (%lld frames); distance to LBS mean %.5f, "
+                "max %.5f\n", t.file.c_str(), f.frames, f.first_frame, f.step, t.motion.c_str(),
+                static_cast<long long>(f.motion_frames), f.mean_to_lbs, f.max_to_lbs);
+  }
   save_dataset(out, d);
-  std::printf("%s: %zu characters (train %zu, validation %zu, test %zu), %zu motions, Delta Mush %d x %g, "
+  char reference[128];
+  if (d.reference == ReferenceKind::arap)
+    std::snprintf(reference, sizeof reference, "ARAP %d iterations, handles at weight >= %g", d.arap.iterations,
+                  double(d.arap.handle_weight));
+  else
+    std::snprintf(reference, sizeof reference, "Delta Mush %d x %g", d.delta_mush.iterations, double(d.delta_mush.step));
+  std::printf("%s: %zu characters (train %zu, validation %zu, test %zu), %zu motions, %s, %zu with file targets, "
               "random poses within %s\n", out.c_str(), d.characters.size(), d.split.train.size(),
-              d.split.validation.size(), d.split.test.size(), d.motions.size(), d.delta_mush.iterations,
-              d.delta_mush.step,
+              d.split.validation.size(), d.split.test.size(), d.motions.size(), reference, d.targets.size(),
               d.joint_limits ? ("joint limits '" + d.joint_limits->name + "'").c_str() : "+-pose-angle per joint axis");
   return 0;
 }

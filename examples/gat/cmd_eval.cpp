@@ -48,7 +48,8 @@ int usage(int rc) {
                "  --size PX       error-map size (default 320)\n"
                "  --device D      cpu (default), vulkan or auto: where the model runs (see gat train --help)\n"
                "  --motion M.bvh  evaluate displacement models and the LBS / DQS baselines on every frame of\n"
-               "                  retargeted motions instead (gat eval --motion X --help for its options)\n");
+               "                  retargeted motions instead (gat eval --motion X --help for its options)\n"
+               "  --targets       the same on the frames of the characters' file targets (gat dataset build --target)\n");
   return rc;
 }
 
@@ -57,7 +58,7 @@ int usage(int rc) {
 int gat::cmd_eval(int argc, char** argv) {
   // Motion evaluation against the reference deformer, with baselines (eval_motion.cpp).
   for (int i = 1; i < argc; ++i)
-    if (!std::strcmp(argv[i], "--motion")) return gat::eval_motion(argc, argv);
+    if (!std::strcmp(argv[i], "--motion") || !std::strcmp(argv[i], "--targets")) return gat::eval_motion(argc, argv);
   std::string path, data, part = "test", device = "cpu", json_path, errormap_dir;
   long samples = 16, seed = 12345, poses = 16, size = 320;
   for (int i = 1; i < argc; ++i) {

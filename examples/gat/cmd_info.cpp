@@ -105,7 +105,14 @@ void print_dataset(const std::string& path, const DatasetDescription& d) {
                 d.random_poses, d.joint_limits->name.c_str(), d.joint_limits->rules.size());
   else
     std::printf("poses      %d random per character per epoch, +-%g rad per joint axis\n", d.random_poses, d.pose_angle);
-  std::printf("reference  Delta Mush, %d iterations, step %g\n", d.delta_mush.iterations, d.delta_mush.step);
+  if (d.reference == ReferenceKind::arap)
+    std::printf("reference  ARAP, %d iterations, handles at dominant weight >= %g\n", d.arap.iterations,
+                double(d.arap.handle_weight));
+  else
+    std::printf("reference  Delta Mush, %d iterations, step %g\n", d.delta_mush.iterations, d.delta_mush.step);
+  for (const FileTargetSource& t : d.targets)
+    std::printf("targets    %s: %s driven by %s%s\n", d.characters[std::size_t(t.character)].c_str(), t.file.c_str(),
+                t.motion.c_str(), t.first_frame ? (" from frame " + std::to_string(*t.first_frame)).c_str() : "");
   std::printf("subsample  %lld consecutive vertices per sample\n", static_cast<long long>(d.subsample));
   if (d.distortion_scales.empty())
     std::printf("features   DenseGATs: the paper's (posed position, normal, joint distances)\n");

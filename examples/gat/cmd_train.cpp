@@ -26,6 +26,7 @@
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/linear_skip.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
 
@@ -48,7 +49,7 @@ int usage(int rc) {
                "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
                "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
                "                 [--device cpu|vulkan|auto] [--minutes M] [--loss-curve FILE.png]\n"
-               "                 [--val-every K] [--sample-vertices V] [--loss mse|l1]\n"
+               "                 [--val-every K] [--sample-vertices V] [--loss mse|l1] [--linear-skip]\n"
                "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
                "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
                "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
@@ -57,6 +58,10 @@ int usage(int rc) {
                "                 --model neuroskinning --task displacement is DenseGATs' comparison)\n"
                "  --loss L       displacement loss: mse (default, the paper) or l1 (mean absolute error:\n"
                "                 keeps LBS where unsure; closer to the mean vertex error gat eval reports)\n"
+               "  --linear-skip  densegats family: add a per-vertex linear map of the input columns to the\n"
+               "                 output, set to the least-squares fit of the training targets before the\n"
+               "                 first epoch (the graph network learns the residual; recorded in the\n"
+               "                 checkpoint's configuration; not the paper's architecture)\n"
                "  --out FILE     checkpoint path (default model.gcm)\n"
                "  --epochs N     epochs to train, in total when resuming (default 10)\n"
                "  --resume FILE  continue from a checkpoint written by gat train (model, data, seed\n"
@@ -120,7 +125,7 @@ std::string hms(double s) {
 int gat::cmd_train(int argc, char** argv) {
   std::string model_name = "densegats", out = "model.gcm", resume, data, task, device = "cpu", curve, loss;
   long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
-  bool samples_set = false;
+  bool samples_set = false, linear_skip = false;
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
   long val_every = 1, sample_vertices = 0;
@@ -132,6 +137,7 @@ int gat::cmd_train(int argc, char** argv) {
     else if (!std::strcmp(a, "--out") && v) out = argv[++i];
     else if (!std::strcmp(a, "--resume") && v) resume = argv[++i];
     else if (!std::strcmp(a, "--data") && v) data = argv[++i];
+    else if (!std::strcmp(a, "--linear-skip")) linear_skip = true;
     else if (!std::strcmp(a, "--loss-curve") && v) curve = argv[++i];
     else if (!std::strcmp(a, "--device") && v) {
       device = argv[++i];
@@ -246,7 +252,19 @@ int gat::cmd_train(int argc, char** argv) {
       }
       cfg.loss = loss == "l1" ? DisplacementLoss::l1 : DisplacementLoss::mse;
     }
+    if (linear_skip) {
+      if (cfg.name.rfind("densegats", 0) != 0 || cfg.task != Task::displacement) {
+        std::fprintf(stderr, "gat train: --linear-skip applies to the densegats family's displacement task, not %s\n",
+                     cfg.name.c_str());
+        return 2;
+      }
+      cfg.linear_skip = true;
+    }
     model = make_model(cfg, std::uint64_t(seed));
+  } else if (linear_skip && !model->config().linear_skip) {
+    std::fprintf(stderr, "gat train: %s was trained without --linear-skip; a resumed run keeps its architecture\n",
+                 resume.c_str());
+    return 2;
   }
   const ModelConfig& cfg = model->config();
   if (!resume.empty() && !loss.empty() && loss != displacement_loss_name(cfg.loss)) {
@@ -274,6 +292,11 @@ int gat::cmd_train(int argc, char** argv) {
     return 2;
   }
   if (resume.empty()) norm = Normaliser::fit(train, cfg.task == Task::displacement);
+  if (resume.empty() && cfg.linear_skip) {
+    const LinearMap f = fit_linear_skip(*model, train, norm);
+    std::printf("linear skip: least-squares fit on %lld training vertices, MSE %.6f (predicting zero: %.6f)\n",
+                static_cast<long long>(f.rows), f.mse_after, f.mse_before);
+  }
   TrainOptions opt = TrainOptions::defaults_for(cfg);
   opt.seed = std::uint64_t(seed);
   opt.lr = lr;

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/linear_skip.hpp"
 
 using namespace gatcore;
 using namespace gatcore::character;
@@ -35,14 +37,22 @@ namespace {
 
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
-               "usage: gat eval --motion M.bvh [--motion ...] --data DATASET [--model [LABEL=]FILE ...]\n"
+               "usage: gat eval --motion M.bvh [--motion ...] | --targets  --data DATASET [--model [LABEL=]FILE ...]\n"
                "                [--part test|validation|train] [--stride K] [--json OUT] [--markdown OUT]\n"
                "                [--errormaps DIR] [--errormap-frames N] [--errormap-size PX]\n"
-               "                [--loss-curve LABEL=TRAIN_LOG ...] [--cm-per-unit X]\n"
+               "                [--loss-curve LABEL=TRAIN_LOG ...] [--cm-per-unit X] [--linear-probe]\n"
                "  Evaluates displacement models (LBS + predicted offsets) and the LBS and DQS baselines\n"
-               "  against the dataset's reference deformer (Delta Mush on LBS) on every K-th frame\n"
+               "  against the dataset's reference deformer (Delta Mush or ARAP on LBS) on every K-th frame\n"
                "  (default 1: all frames) of each motion retargeted onto each character of the part:\n"
-               "  per-vertex distance mean / max / min per character and motion, per character, overall.\n"
+               "  per-vertex distance mean / p99 / max / min per character and motion, per character, overall.\n"
+               "  Characters with file targets (gat dataset build --target) are evaluated on their frames\n"
+               "  instead (gat eval --targets --data D: no --motion needed).\n"
+               "  --max-limit-excess DEG  leaves out frames whose pose leaves the dataset's random-pose joint\n"
+               "                   limits (what training covered) by more than DEG degrees on some joint axis\n"
+               "                   (rig/joint_limits.hpp pose_limit_excess; counted as frames_excluded)\n"
+               "  --linear-probe   also evaluates the least-squares linear map of the models' input columns\n"
+               "                   to the target, fitted on the training characters' epoch-0 poses (the\n"
+               "                   linear probe a network has to beat; gat train --linear-skip starts there)\n"
                "  --cm-per-unit X  centimetres per world unit (default: 100 for glTF files, whose unit is the\n"
                "                   metre; unknown for other sources unless given)\n"
                "  --errormaps DIR  per-vertex error colour maps (PNG) of N frames (default 2) of the first\n"
@@ -53,18 +63,40 @@ int usage(int rc) {
   return rc;
 }
 
+// Mean / max / min and a log-spaced histogram for percentiles: 4096 bins
+// from 1e-8 to 1e2 units (each bin 0.56 % wide; errors outside land in the
+// end bins), so the 99th percentile is exact to within half a percent
+// without keeping millions of per-vertex errors per row.
 struct Acc {
+  static constexpr int kBins = 4096;
+  static constexpr double kLo = -8.0, kHi = 2.0;  // log10 range
   double sum = 0, max = 0, min = std::numeric_limits<double>::infinity();
   std::int64_t count = 0;
+  std::vector<std::int64_t> hist = std::vector<std::int64_t>(kBins, 0);
   void add(double e) {
     sum += e, ++count;
     max = std::max(max, e), min = std::min(min, e);
+    const double b = e > 0 ? (std::log10(e) - kLo) / (kHi - kLo) * kBins : 0.0;
+    ++hist[std::size_t(std::clamp(b, 0.0, double(kBins - 1)))];
   }
   void add(const Acc& o) {
     sum += o.sum, count += o.count;
     max = std::max(max, o.max), min = std::min(min, o.min);
+    for (int b = 0; b < kBins; ++b) hist[std::size_t(b)] += o.hist[std::size_t(b)];
   }
   double mean() const { return count ? sum / double(count) : 0.0; }
+  // The q-quantile (0..1) of what add() was given (the histogram is not
+  // rescaled when sum / max / min are converted to cm): its bin's geometric middle.
+  double quantile(double q) const {
+    if (!count) return 0.0;
+    const auto want = std::max<std::int64_t>(1, std::int64_t(std::ceil(q * double(count))));
+    std::int64_t seen = 0;
+    for (int b = 0; b < kBins; ++b) {
+      seen += hist[std::size_t(b)];
+      if (seen >= want) return std::pow(10.0, kLo + (b + 0.5) * (kHi - kLo) / kBins);
+    }
+    return std::pow(10.0, kHi);
+  }
 };
 
 void write_atomic(const std::string& path, const std::string& text) { gatcore::write_file_atomic(path, text); }
@@ -111,9 +143,16 @@ int gat::eval_motion(int argc, char** argv) {
   std::vector<std::pair<std::string, std::string>> model_args;  // label, file
   long stride = 1, map_frames = 2, map_size = 320;
   double cm_per_unit = -1;
+  bool linear_probe = false;
+  double max_excess_deg = -1;  // < 0: every frame
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") return usage(0);
+    if (a == "--linear-probe") {
+      linear_probe = true;
+      continue;
+    }
+    if (a == "--targets") continue;  // file targets are evaluated whenever a character has them
     if (i + 1 >= argc) {
       std::fprintf(stderr, "gat eval: unknown or incomplete option '%s'\n", a.c_str());
       return usage(2);
@@ -134,6 +173,12 @@ int gat::eval_motion(int argc, char** argv) {
       model_args.emplace_back(eq == std::string::npos ? std::string() : v.substr(0, eq),
                               eq == std::string::npos ? v : v.substr(eq + 1));
     } else if (a == "--stride") stride = integer(1, 1000000);
+    else if (a == "--max-limit-excess") {
+      char* end = nullptr;
+      max_excess_deg = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end || !(max_excess_deg >= 0) || !std::isfinite(max_excess_deg))
+        throw InvalidArgument("gat eval: --max-limit-excess expects degrees >= 0, got '" + v + "'");
+    }
     else if (a == "--json") json_out = v;
     else if (a == "--markdown") md_out = v;
     else if (a == "--errormaps") map_dir = v;
@@ -150,7 +195,7 @@ int gat::eval_motion(int argc, char** argv) {
       return usage(2);
     }
   }
-  if (data.empty() || motion_paths.empty()) {
+  if (data.empty()) {
     std::fprintf(stderr, "gat eval: --motion needs --data DATASET\n");
     return usage(2);
   }
@@ -194,17 +239,33 @@ int gat::eval_motion(int argc, char** argv) {
 
   std::vector<std::string> methods = {"LBS", "DQS"};
   for (const auto& m : models_) methods.push_back(m.label);
+  // The linear probe: least squares on the training characters' epoch-0 samples.
+  LinearMap probe;
+  Normaliser probe_norm;
+  if (linear_probe) {
+    const auto tp = std::chrono::steady_clock::now();
+    const std::vector<Sample> train = training_samples(td, Task::displacement, DatasetPart::train, 0);
+    GATCORE_CHECK(!train.empty(), "gat eval: --linear-probe: ", data, " has no training samples");
+    probe_norm = Normaliser::fit(train, true);
+    probe = fit_linear_map(train, probe_norm, td.feature_dim(Task::displacement), 3);
+    std::printf("  linear probe: %lld training vertices, normalised MSE %.5f (zero: %.5f), %.1f s\n",
+                static_cast<long long>(probe.rows), probe.mse_after, probe.mse_before,
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - tp).count());
+    methods.push_back("linear probe");
+  }
   const std::size_t K = methods.size();
   if (!map_dir.empty()) fs::create_directories(map_dir);
 
   nlohmann::json rows = nlohmann::json::array(), maps = nlohmann::json::array();
   std::vector<Acc> overall(K), overall_cm(K);
   bool all_cm = true;
+  double common_cm = -1;  // the characters' cm per unit when they all share one (else 0)
   struct Row {
     std::string character, motion;
     std::int64_t frames = 0, vertices = 0;
     double cm = 0;
     std::vector<Acc> acc;
+    std::int64_t excluded = 0;  // frames left out (--max-limit-excess)
   };
   std::vector<Row> table, per_char;
   for (std::int32_t c : chars) {
@@ -214,14 +275,32 @@ int gat::eval_motion(int argc, char** argv) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char x) { return char(std::tolower(x)); });
     const double cm = cm_per_unit > 0 ? cm_per_unit : (ext == ".glb" || ext == ".gltf") ? 100.0 : 0.0;
     all_cm = all_cm && cm > 0;
+    common_cm = common_cm < 0 ? cm : (common_cm == cm ? cm : 0.0);
     const double to_world = 1.0 / double(pc.norm.scale);
     const std::int64_t n = pc.character.mesh.num_vertices();
     Row chrow{character_label(entry), "all", 0, n, cm, std::vector<Acc>(K)};
-    for (std::size_t mi = 0; mi < motions.size(); ++mi) {
+    // A character with file targets is evaluated on their frames (the poses
+    // of the motion that drove them); the others on the --motion BVHs.
+    const bool files = pc.reference && pc.reference->num_frames() > 0;
+    std::vector<std::string> seq_names;
+    if (files) {
+      for (const FileTargetSource& t : td.description.targets)
+        if (t.character == c) seq_names.push_back(t.file);
+    } else {
+      for (const Motion& m : motions) seq_names.push_back(m.name);
+    }
+    // The rule for poses outside what training covered (--max-limit-excess):
+    // frames whose joints leave the dataset's random-pose limits by more
+    // than the given angle are left out (and counted).
+    const std::vector<JointLimit> limits = td.description.joint_limits
+                                               ? td.description.joint_limits->limits_for(pc.character.skeleton)
+                                               : uniform_limits(pc.character.skeleton, td.description.pose_angle);
+    for (std::size_t mi = 0; mi < seq_names.size(); ++mi) {
       RetargetOptions ro;
       ro.target_name = pc.character.name;
-      const Clip clip = retarget(motions[mi], pc.character.skeleton, mat4_identity(), ro);
-      Row row{character_label(entry), motions[mi].name, 0, n, cm, std::vector<Acc>(K)};
+      const Clip clip = files ? Clip{seq_names[mi], 30.0f, pc.target_poses}
+                              : retarget(motions[mi], pc.character.skeleton, mat4_identity(), ro);
+      Row row{character_label(entry), seq_names[mi], 0, n, cm, std::vector<Acc>(K)};
       std::vector<std::size_t> frames;
       for (std::size_t f = 0; f < clip.frames.size(); f += std::size_t(stride)) frames.push_back(f);
       std::vector<std::size_t> map_at;
@@ -231,8 +310,13 @@ int gat::eval_motion(int argc, char** argv) {
       const auto tc = std::chrono::steady_clock::now();
       for (std::size_t f : frames) {
         const Pose& pose = clip.frames[f];
+        if (max_excess_deg >= 0 &&
+            pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits).radians > max_excess_deg * std::numbers::pi / 180.0) {
+          ++row.excluded;
+          continue;
+        }
         DenseGatsSample raw;
-        const Sample s = densegats_full_sample(td, c, pose, &raw);
+        const Sample s = densegats_full_sample(td, c, pose, &raw, files ? std::int32_t(f) : -1);
         // Reference (Delta Mush) and DQS in normalised units.
         const std::vector<Mat4> g = global_transforms(pc.character.skeleton, pose);
         std::vector<Mat4> S(g.size());
@@ -241,6 +325,7 @@ int gat::eval_motion(int argc, char** argv) {
         std::vector<std::vector<float>> err(K, std::vector<float>(std::size_t(n)));
         std::vector<Tensor> preds;
         for (auto& m : models_) preds.push_back(predict(*m.l.model, s, m.l.norm));
+        if (linear_probe) preds.push_back(predict_linear(probe, s, probe_norm));
         // The target is in the root frame; the reference in the world's.
         // (Model errors are differences of two root-frame offsets: the same
         // length in either frame.)
@@ -285,24 +370,26 @@ int gat::eval_motion(int argc, char** argv) {
           std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(q), sorted.end());
           ro.max_error = std::max(sorted[q], 1e-12f);
           for (std::size_t k = 0; k < K; ++k) {
-            std::string name = row.character + "_" + stem(motions[mi].name) + "_f" + std::to_string(f) + "_" + methods[k];
+            std::string name = row.character + "_" + stem(seq_names[mi]) + "_f" + std::to_string(f) + "_" + methods[k];
             std::replace(name.begin(), name.end(), '/', '_');
             write_png((fs::path(map_dir) / (name + ".png")).string(),
                       render_error_map(world, pc.character.mesh.triangles, err[k], ro));
-            maps.push_back({{"file", name + ".png"}, {"character", row.character}, {"motion", motions[mi].name},
+            maps.push_back({{"file", name + ".png"}, {"character", row.character}, {"motion", seq_names[mi]},
                             {"frame", f}, {"method", methods[k]}, {"colour_scale_top", ro.max_error},
                             {"colour_scale_top_cm", cm > 0 ? ro.max_error * cm : 0.0}});
           }
         }
       }
-      std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%.1f s):", row.character.c_str(),
-                  stem(row.motion).c_str(), static_cast<long long>(row.frames), static_cast<long long>(n),
+      std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%lld outside the limits left out, %.1f s):",
+                  row.character.c_str(), stem(row.motion).c_str(), static_cast<long long>(row.frames),
+                  static_cast<long long>(n), static_cast<long long>(row.excluded),
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
       for (std::size_t k = 0; k < K; ++k) std::printf("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
       std::printf("\n");
       std::fflush(stdout);
       for (std::size_t k = 0; k < K; ++k) chrow.acc[k].add(row.acc[k]);
       chrow.frames += row.frames;
+      chrow.excluded += row.excluded;
       table.push_back(row);
     }
     for (std::size_t k = 0; k < K; ++k) {
@@ -324,8 +411,11 @@ int gat::eval_motion(int argc, char** argv) {
 
   // Report.
   auto stats_json = [&](const Acc& a, double cm) {
-    nlohmann::json j = {{"mean", a.mean()}, {"max", a.max}, {"min", a.min}, {"vertex_frames", a.count}};
-    if (cm > 0) j["mean_cm"] = a.mean() * cm, j["max_cm"] = a.max * cm, j["min_cm"] = a.min * cm;
+    nlohmann::json j = {{"mean", a.mean()}, {"p99", a.quantile(0.99)}, {"max", a.max}, {"min", a.min},
+                        {"vertex_frames", a.count}};
+    if (cm > 0)
+      j["mean_cm"] = a.mean() * cm, j["p99_cm"] = a.quantile(0.99) * cm, j["max_cm"] = a.max * cm,
+      j["min_cm"] = a.min * cm;
     return j;
   };
   nlohmann::json j;
@@ -335,8 +425,14 @@ int gat::eval_motion(int argc, char** argv) {
   j["dataset_hash"] = td.hash;
   j["part"] = part;
   j["stride"] = stride;
-  j["reference"] = {{"name", "delta_mush"}, {"iterations", td.description.delta_mush.iterations},
-                    {"step", td.description.delta_mush.step}};
+  j["max_limit_excess_deg"] = max_excess_deg;
+  if (td.description.reference == ReferenceKind::arap)
+    j["reference"] = {{"name", "arap"}, {"iterations", td.description.arap.iterations},
+                      {"handle_weight", td.description.arap.handle_weight}};
+  else
+    j["reference"] = {{"name", "delta_mush"}, {"iterations", td.description.delta_mush.iterations},
+                      {"step", td.description.delta_mush.step}};
+  if (!td.description.targets.empty()) j["reference"]["file_targets"] = td.description.targets.size();
   j["motions"] = motion_paths;
   j["methods"] = methods;
   for (const auto& m : models_) {
@@ -350,6 +446,7 @@ int gat::eval_motion(int argc, char** argv) {
   for (const auto& group : {&table, &per_char})
     for (const Row& r : *group) {
       nlohmann::json rj = {{"character", r.character}, {"motion", r.motion}, {"frames", r.frames},
+                           {"frames_excluded", r.excluded},
                            {"vertices", r.vertices}, {"cm_per_unit", r.cm}};
       for (std::size_t k = 0; k < K; ++k) rj["methods"][methods[k]] = stats_json(r.acc[k], r.cm);
       rows.push_back(rj);
@@ -361,6 +458,7 @@ int gat::eval_motion(int argc, char** argv) {
     if (all_cm) {
       j["overall"][methods[k]]["mean_cm"] = overall_cm[k].mean();
       j["overall"][methods[k]]["max_cm"] = overall_cm[k].max;
+      if (common_cm > 0) j["overall"][methods[k]]["p99_cm"] = overall[k].quantile(0.99) * common_cm;
       j["overall"][methods[k]]["min_cm"] = overall_cm[k].min;
     }
   }
@@ -370,13 +468,21 @@ int gat::eval_motion(int argc, char** argv) {
   std::ostringstream md;
   const char* u = all_cm ? "cm" : "units";
   md << "Overall (" << per_char.size() << " " << part << " characters, every " << stride
-     << (stride == 1 ? "" : "th") << " frame of " << motions.size() << " motion(s); per-vertex distance to Delta Mush, "
-     << u << "):\n\n| method | mean | max | min |\n|---|---:|---:|---:|\n";
+     << (stride == 1 ? "" : "th") << " frame of " << motions.size() << " motion(s) or file targets; per-vertex distance to the reference, "
+     << u << "; p99: the 99th percentile, within 0.6 %):\n\n| method | mean | p99 | max | min |\n|---|---:|---:|---:|---:|\n";
   for (std::size_t k = 0; k < K; ++k) {
     const Acc& a = all_cm ? overall_cm[k] : overall[k];
-    md << "| " << methods[k] << " | " << fmt(a.mean()) << " | " << fmt(a.max) << " | " << fmt(a.min) << " |\n";
+    const double p99 = all_cm ? (common_cm > 0 ? overall[k].quantile(0.99) * common_cm : -1.0) : overall[k].quantile(0.99);
+    md << "| " << methods[k] << " | " << fmt(a.mean()) << " | " << (p99 >= 0 ? fmt(p99) : std::string("-")) << " | "
+       << fmt(a.max) << " | " << fmt(a.min) << " |\n";
   }
-  md << "\nPer character and motion (mean / max / min, " << u << "):\n\n| character | motion | frames | vertices |";
+  if (max_excess_deg >= 0) {
+    std::int64_t ex = 0, kept = 0;
+    for (const Row& r : per_char) ex += r.excluded, kept += r.frames;
+    md << "\nFrames whose pose leaves the dataset's random-pose joint limits by more than " << max_excess_deg
+       << " degrees are left out: " << ex << " of " << ex + kept << ".\n";
+  }
+  md << "\nPer character and motion (mean / p99 / max / min, " << u << "):\n\n| character | motion | frames | vertices |";
   for (const auto& m : methods) md << " " << m << " |";
   md << "\n|---|---|---:|---:|";
   for (std::size_t k = 0; k < K; ++k) md << "---:|";
@@ -387,8 +493,8 @@ int gat::eval_motion(int argc, char** argv) {
          << r.vertices << " |";
       const double s = all_cm ? r.cm : 1.0;
       for (std::size_t k = 0; k < K; ++k)
-        md << " " << fmt(r.acc[k].mean() * s) << " / " << fmt(r.acc[k].max * s) << " / " << fmt(r.acc[k].min * s)
-           << " |";
+        md << " " << fmt(r.acc[k].mean() * s) << " / " << fmt(r.acc[k].quantile(0.99) * s) << " / "
+           << fmt(r.acc[k].max * s) << " / " << fmt(r.acc[k].min * s) << " |";
       md << "\n";
     }
   if (!json_out.empty()) write_atomic(json_out, j.dump(2) + "\n");

@@ -143,6 +143,7 @@ const std::vector<Field>& fields() {
       float_field("beta", &ModelConfig::beta),
       bool_field("dense", &ModelConfig::dense),
       list_field("head", &ModelConfig::head),
+      bool_field("linear_skip", &ModelConfig::linear_skip),
       int_field("gat_layers", &ModelConfig::gat_layers),
       list_field("stage1", &ModelConfig::stage1),
       list_field("gc_heads", &ModelConfig::gc_heads),

@@ -3,6 +3,8 @@
 //   modules.m: dense module of `blocks` GAT blocks (one buffer per module)
 //   transitions.m: GAT block between modules m and m+1 (writes into module m+1's buffer)
 //   head: Linear 512 → BN → tanh → Linear 128 → BN → tanh → Linear out
+//   skip (config.linear_skip): Linear in → out on the input columns, added
+//     to the head's output; the head's last Linear then starts at zero
 #include "gatcore/nn/dense_module.hpp"
 #include "gatcore/nn/mlp.hpp"
 #include "models_impl.hpp"
@@ -34,6 +36,15 @@ class DenseGats final : public Model {
       }
     }
     head_ = nn::Mlp(root.sub("head"), w, c.head, c.out_dim, dl, init);
+    if (c.linear_skip) {
+      GATCORE_CHECK(c.task == Task::displacement, "densegats: linear_skip needs the displacement task");
+      skip_ = nn::Linear(root.sub("skip"), c.in_dim, c.out_dim, init, nn::Init::zeros, true);
+      // A residual head: the untrained network is the skip alone (zero, or
+      // the least-squares fit), and the graph part learns what the linear map
+      // cannot. The last layer's gradient (hidden^T · dL/dy) is not zero, so
+      // it leaves zero on the first step.
+      head_.last.W.value().zero_();
+    }
   }
 
   Var forward(const Batch& b, bool training) override {
@@ -50,7 +61,9 @@ class DenseGats final : public Model {
         transitions_[m].forward(b.graph, y, training, nn::DenseModule::input_slot(buf, modules_[m + 1].in));
       }
     }
-    return output(head_.forward(y, training, rng_), b);
+    Var out = head_.forward(y, training, rng_);
+    if (cfg_.linear_skip) out = add(out, skip_.forward(Var(b.x)));
+    return output(out, b);
   }
 
   void fold() override {
@@ -63,6 +76,7 @@ class DenseGats final : public Model {
   std::vector<nn::DenseModule> modules_;
   std::vector<nn::GatBlock> transitions_;
   nn::Mlp head_;
+  nn::Linear skip_;  // config.linear_skip
 };
 
 }  // namespace

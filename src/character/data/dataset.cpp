@@ -31,13 +31,15 @@ std::vector<std::int32_t> vertex_range(std::int64_t n, std::int64_t first, std::
 }  // namespace
 
 DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
-                                      std::int64_t count, bool with_target) {
+                                      std::int64_t count, bool with_target, std::int32_t target_frame) {
   const Character& ch = pc.character;
   const PosedFrame f = pose_frame(pc, pose);
   DenseGatsSample s;
   s.root_motion = f.root_motion;
   const std::vector<float> mush_root =
-      with_target ? to_root_frame(pc, f, delta_mush_apply(pc.delta_mush, f.lbs_world)) : std::vector<float>{};
+      !with_target   ? std::vector<float>{}
+      : pc.reference ? to_root_frame(pc, f, pc.reference->deform(f.lbs_world, target_frame))
+                     : to_root_frame(pc, f, delta_mush_apply(pc.delta_mush, f.lbs_world));
   s.vertices = vertex_range(ch.mesh.num_vertices(), first, count);
   const std::int64_t m = static_cast<std::int64_t>(s.vertices.size());
   if (with_target) s.target = Tensor::empty(m, 3);
@@ -115,7 +117,7 @@ void stream_densegats_samples(const std::vector<PreparedCharacter>& characters, 
                 SerialRegion serial;  // no OpenMP inside TBB tasks
                 const SampleTask& t = tasks[i];
                 auto s = std::make_unique<DenseGatsSample>(
-                    make_densegats_sample(characters[t.character], t.pose, t.first, t.count));
+                    make_densegats_sample(characters[t.character], t.pose, t.first, t.count, true, t.target_frame));
                 s->character = t.character;
                 s->pose = t.pose_index;
                 return s.release();

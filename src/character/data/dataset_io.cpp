@@ -4,6 +4,7 @@
 #include <type_traits>
 #include <cmath>
 #include <random>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -95,7 +96,29 @@ void save_dataset(const std::string& path, const DatasetDescription& d) {
   if (d.joint_limits) j["joint_limits"] = nlohmann::json::parse(joint_limits_json(*d.joint_limits));
   j["motion_stride"] = d.motion_stride;
   j["seed"] = d.seed;
-  j["reference_deformer"] = {{"name", "delta_mush"}, {"iterations", d.delta_mush.iterations}, {"step", d.delta_mush.step}};
+  if (d.reference == ReferenceKind::arap)
+    j["reference_deformer"] = {{"name", "arap"}, {"iterations", d.arap.iterations}, {"handle_weight", d.arap.handle_weight}};
+  else
+    j["reference_deformer"] = {{"name", "delta_mush"}, {"iterations", d.delta_mush.iterations}, {"step", d.delta_mush.step}};
+  if (!d.targets.empty()) {
+    nlohmann::json targets = nlohmann::json::array();
+    for (const FileTargetSource& t : d.targets) {
+      // Each file (and a BVH motion) relative to this file, like the characters.
+      std::vector<std::string> files;
+      std::stringstream ss(t.file);
+      for (std::string f; std::getline(ss, f, ',');)
+        if (!f.empty()) files.push_back(f);
+      std::string joined;
+      for (const std::string& f : relative_to(files, path)) joined += (joined.empty() ? "" : ",") + f;
+      const bool clip = t.motion == "clip" || t.motion.rfind("clip:", 0) == 0;
+      nlohmann::json tj = {{"character", t.character}, {"file", joined},
+                           {"motion", clip ? t.motion : relative_to({t.motion}, path)[0]}};
+      if (!t.animation.empty()) tj["animation"] = t.animation;
+      if (t.first_frame) tj["first_frame"] = *t.first_frame;
+      targets.push_back(tj);
+    }
+    j["targets"] = targets;
+  }
   j["subsample"] = d.subsample;
   j["distortion_scales"] = d.distortion_scales;
   j["validation"] = d.validation;
@@ -153,11 +176,38 @@ DatasetDescription load_dataset(const std::string& path) {
     d.motion_stride = json_number<int>(j.at("motion_stride"), "motion_stride", 1, L.max_motion_stride, path);
     d.seed = json_number<std::uint32_t>(j.at("seed"), "seed", 0, 4294967295.0, path);
     const auto& rd = j.at("reference_deformer");
-    GATCORE_CHECK(rd.at("name").get<std::string>() == "delta_mush", path, ": unknown reference deformer ",
-                  rd.at("name").dump());
-    d.delta_mush.iterations =
-        json_number<int>(rd.at("iterations"), "reference_deformer.iterations", 0, L.max_dm_iterations, path);
-    d.delta_mush.step = json_number<float>(rd.at("step"), "reference_deformer.step", L.min_dm_step, 1, path);
+    d.reference = parse_reference_kind(rd.at("name").get<std::string>(), path + ": field \"reference_deformer\"");
+    GATCORE_CHECK(d.reference != ReferenceKind::files, path,
+                  ": \"reference_deformer\" is a built-in deformer (delta_mush or arap); file targets go in \"targets\"");
+    if (d.reference == ReferenceKind::arap) {
+      d.arap.iterations =
+          json_number<int>(rd.at("iterations"), "reference_deformer.iterations", 1, L.max_dm_iterations, path);
+      d.arap.handle_weight =
+          json_number<float>(rd.at("handle_weight"), "reference_deformer.handle_weight", 0, 1e6, path);
+    } else {
+      d.delta_mush.iterations =
+          json_number<int>(rd.at("iterations"), "reference_deformer.iterations", 0, L.max_dm_iterations, path);
+      d.delta_mush.step = json_number<float>(rd.at("step"), "reference_deformer.step", L.min_dm_step, 1, path);
+    }
+    if (j.contains("targets")) {
+      GATCORE_CHECK(j.at("targets").is_array(), path, ": field \"targets\" must be an array");
+      for (const auto& tj : j.at("targets")) {
+        FileTargetSource t;
+        t.character = json_number<std::int32_t>(tj.at("character"), "targets.character", 0, 1e9, path);
+        std::vector<std::string> files;
+        std::stringstream ss(tj.at("file").get<std::string>());
+        for (std::string f; std::getline(ss, f, ',');)
+          if (!f.empty()) files.push_back(f);
+        GATCORE_CHECK(!files.empty(), path, ": a target has no file");
+        for (const std::string& f : resolve(files, path)) t.file += (t.file.empty() ? "" : ",") + f;
+        const std::string m = tj.at("motion").get<std::string>();
+        t.motion = m == "clip" || m.rfind("clip:", 0) == 0 ? m : resolve({m}, path)[0];
+        t.animation = tj.value("animation", "");
+        if (tj.contains("first_frame"))
+          t.first_frame = json_number<double>(tj.at("first_frame"), "targets.first_frame", -1e9, 1e9, path);
+        d.targets.push_back(std::move(t));
+      }
+    }
     d.subsample = json_number<std::int64_t>(j.at("subsample"), "subsample", 0, L.max_subsample, path);
     // Absent in datasets written before the field: the paper's features only.
     if (j.contains("distortion_scales")) {
@@ -171,6 +221,13 @@ DatasetDescription load_dataset(const std::string& path) {
     d.split.train = json_indices(j.at("split").at("train"), "split.train", path);
     d.split.validation = json_indices(j.at("split").at("validation"), "split.validation", path);
     d.split.test = json_indices(j.at("split").at("test"), "split.test", path);
+    const auto n = static_cast<std::int32_t>(d.characters.size());
+    std::vector<char> has_target(std::size_t(n), 0);
+    for (const FileTargetSource& t : d.targets) {
+      GATCORE_CHECK(t.character >= 0 && t.character < n, path, ": a target names character ", t.character, " of ", n);
+      GATCORE_CHECK(!has_target[std::size_t(t.character)], path, ": character ", t.character, " has two targets");
+      has_target[std::size_t(t.character)] = 1;
+    }
     // The same checks as `gat dataset build` (describe_dataset).
     validate_dataset(d, path);
     return d;
@@ -217,6 +274,19 @@ std::vector<SampleTask> dataset_tasks(const DatasetDescription& d, const std::ve
       t.first = count < n ? static_cast<std::int64_t>(rng() % static_cast<std::uint32_t>(n - count + 1)) : 0;
       tasks.push_back(std::move(t));
     };
+    // File targets: their frames only, every motion_stride-th, from a phase
+    // that moves with the epoch (so `stride` epochs see every frame).
+    if (const std::int32_t F = pc.reference ? pc.reference->num_frames() : 0; F > 0) {
+      GATCORE_CHECK(static_cast<std::int32_t>(pc.target_poses.size()) == F, "dataset_tasks: character ", c, " has ",
+                    F, " target frames but ", pc.target_poses.size(), " poses");
+      const std::int32_t stride = std::min(d.motion_stride, F);
+      std::int32_t index = 0;
+      for (std::int32_t k = epoch % stride; k < F; k += stride) {
+        add(pc.target_poses[std::size_t(k)], index++);
+        tasks.back().target_frame = k;
+      }
+      continue;
+    }
     const auto limits = d.joint_limits ? d.joint_limits->limits_for(pc.character.skeleton)
                                        : uniform_limits(pc.character.skeleton, d.pose_angle);
     for (int p = 0; p < d.random_poses; ++p) add(random_pose(pc.character.skeleton, pc.rest, limits, rng), p);

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "gatcore/character/data/file_targets.hpp"
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/error.hpp"
 
@@ -52,9 +53,15 @@ TrainingData load_training_data(const std::string& path) {
   t.hash = file_hash(path);
   const DatasetDescription& d = t.description;
   GATCORE_CHECK(!d.characters.empty(), path, ": the dataset has no characters");
-  for (const std::string& e : d.characters) {
+  for (std::size_t c = 0; c < d.characters.size(); ++c) {
+    const std::string& e = d.characters[c];
     try {
-      t.characters.push_back(prepare_character(load_dataset_character(e), d.delta_mush, d.distortion_scales));
+      const Character file_character = load_dataset_character(e);
+      t.characters.push_back(prepare_character(file_character, d.delta_mush, d.distortion_scales));
+      PreparedCharacter& pc = t.characters.back();
+      if (d.reference == ReferenceKind::arap) pc.reference = arap_reference(pc.character.mesh, d.arap);
+      for (const FileTargetSource& src : d.targets)
+        if (src.character == static_cast<std::int32_t>(c)) attach_file_targets(pc, file_character, src, path);
     } catch (const std::exception& ex) {
       throw InvalidArgument(detail::cat(path, ": character '", e, "': ", ex.what()));
     }
@@ -155,10 +162,10 @@ std::vector<models::Sample> training_samples(const TrainingData& data, models::T
 }
 
 models::Sample densegats_full_sample(const TrainingData& data, std::int32_t character, const Pose& pose,
-                                     DenseGatsSample* raw) {
+                                     DenseGatsSample* raw, std::int32_t target_frame) {
   GATCORE_CHECK(character >= 0 && character < static_cast<std::int32_t>(data.characters.size()),
                 "densegats_full_sample: character ", character, " of ", data.characters.size());
-  DenseGatsSample s = make_densegats_sample(data.characters[std::size_t(character)], pose, 0, 0);
+  DenseGatsSample s = make_densegats_sample(data.characters[std::size_t(character)], pose, 0, 0, true, target_frame);
   models::Sample m;
   m.name = data.description.characters[std::size_t(character)];
   m.features = densegats_model_features(

@@ -1,6 +1,7 @@
 // Per-joint rotation limit tables (JSON through nlohmann-json).
 #include "gatcore/character/rig/joint_limits.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -210,6 +211,32 @@ std::string joint_limits_json(const JointLimitTable& t) {
     j["joints"].push_back(e);
   }
   return j.dump(2);
+}
+
+LimitExcess pose_limit_excess(const Skeleton& s, const Pose& rest, const Pose& pose,
+                              const std::vector<JointLimit>& limits) {
+  const std::int32_t J = s.num_joints();
+  GATCORE_CHECK(static_cast<std::int32_t>(limits.size()) == J && static_cast<std::int32_t>(rest.local.size()) == J &&
+                    static_cast<std::int32_t>(pose.local.size()) == J,
+                "pose_limit_excess: ", limits.size(), " limits, ", rest.local.size(), " rest and ", pose.local.size(),
+                " posed transforms for ", J, " joints");
+  LimitExcess worst;
+  for (std::int32_t j = 0; j < J; ++j) {
+    if (s.parents[std::size_t(j)] < 0) continue;  // roots carry the motion's root movement
+    const Quat& r = rest.local[std::size_t(j)].rotation;
+    const Quat q = quat_normalize(quat_mul({-r[0], -r[1], -r[2], r[3]}, pose.local[std::size_t(j)].rotation));
+    // Rotation matrix of q; R = Rx(a) Ry(b) Rz(c): R02 = sin b, a = atan2(-R12, R22), c = atan2(-R01, R00).
+    const double x = q[0], y = q[1], z = q[2], w = q[3];
+    const double r00 = 1 - 2 * (y * y + z * z), r01 = 2 * (x * y - z * w), r02 = 2 * (x * z + y * w);
+    const double r12 = 2 * (y * z - x * w), r22 = 1 - 2 * (x * x + y * y);
+    const double ang[3] = {std::atan2(-r12, r22), std::asin(std::clamp(r02, -1.0, 1.0)), std::atan2(-r01, r00)};
+    for (int a = 0; a < 3; ++a) {
+      const double lo = limits[std::size_t(j)].lo[std::size_t(a)], hi = limits[std::size_t(j)].hi[std::size_t(a)];
+      const double e = std::max({0.0, lo - ang[a], ang[a] - hi});
+      if (e > worst.radians) worst = {float(e), j, a};
+    }
+  }
+  return worst;
 }
 
 }  // namespace gatcore::character

@@ -9,12 +9,14 @@
 // coordinates (NormalisationStats).
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <span>
 #include <vector>
 
 #include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/deform/reference_deformer.hpp"
 #include "gatcore/character/features/features.hpp"
 #include "gatcore/character/features/frame_features.hpp"
 #include "gatcore/character/features/prepared_character.hpp"
@@ -31,7 +33,7 @@ namespace gatcore::character {
 struct DenseGatsSample {
   Tensor features;  // [m, 6 + J]: posed position, posed normal, distance to each joint (normalised, root frame)
   Tensor distortion;  // [m, 3 S]: detail distortion at the character's S scales (normalised, root frame); S = 0: empty
-  Tensor target;    // [m, 3]: Delta Mush - LBS displacement (normalised units, root frame)
+  Tensor target;    // [m, 3]: reference deformer - LBS displacement (normalised units, root frame)
   Tensor lbs;       // [m, 3]: LBS positions (normalised, world frame)
   Mat4 root_motion = mat4_identity();  // the root's current world transform times its rest inverse
   CsrGraph graph;   // subgraph of the mesh graph induced by `vertices`
@@ -41,10 +43,12 @@ struct DenseGatsSample {
 
 // One pose of one character; `count` consecutive vertices from `first`
 // (count <= 0 or >= n: the whole mesh). Normals and Delta Mush are computed
-// on the whole mesh, then restricted. `with_target` false (inference) skips
-// Delta Mush and leaves `target` undefined.
+// on the whole mesh, then restricted. The target is the character's
+// reference deformer (pc.reference) on the LBS mesh; `target_frame` >= 0 is
+// the frame of file targets (pose = pc.target_poses[target_frame]).
+// `with_target` false (inference) skips it and leaves `target` undefined.
 DenseGatsSample make_densegats_sample(const PreparedCharacter& pc, const Pose& pose, std::int64_t first,
-                                      std::int64_t count, bool with_target = true);
+                                      std::int64_t count, bool with_target = true, std::int32_t target_frame = -1);
 // The sample's model input and root-to-world offsets (frame_features.hpp).
 inline Tensor densegats_model_features(const Tensor& bone_features, const DenseGatsSample& s) {
   return densegats_model_features(bone_features, s.distortion);
@@ -73,6 +77,7 @@ Split split_by_character(std::int32_t num_characters, float validation, float te
 
 struct SampleTask {
   std::int32_t character = 0, pose_index = 0;
+  std::int32_t target_frame = -1;  // file targets: the frame (make_densegats_sample)
   Pose pose;
   std::int64_t first = 0, count = 0;
 };
@@ -87,6 +92,19 @@ void stream_densegats_samples(const std::vector<PreparedCharacter>& characters, 
 
 namespace gatcore::character {
 
+// Per-frame targets a character carries from files (io/target_frames.hpp):
+// the frames of `file` are the targets of the poses of `motion` at motion
+// frame first_frame + k * step for target frame k (step: the .pc2 sample
+// rate; 1 for a glTF). Such a character trains and evaluates on those frames
+// only (no random poses: there is no target for them).
+struct FileTargetSource {
+  std::int32_t character = -1;  // index into DatasetDescription::characters
+  std::string file;             // .pc2, comma-separated .pc2 (one per mesh) or .glb / .gltf
+  std::string motion;           // a BVH retargeted onto the character, or "clip:NAME" (the file's own)
+  std::string animation;        // glTF: the morph animation (empty: "deform" or the only one)
+  std::optional<double> first_frame;  // unset: the file's (.pc2 start frame; glTF 0)
+};
+
 // What `gat dataset build` writes (JSON): the sources and every setting the
 // samples depend on, so a trainer regenerates identical samples on the fly.
 struct DatasetDescription {
@@ -97,7 +115,10 @@ struct DatasetDescription {
   std::optional<JointLimitTable> joint_limits;  // per-joint limits for the random poses (recorded in full)
   int motion_stride = 4;                // every k-th motion frame
   std::uint32_t seed = 0;
-  DeltaMushParams delta_mush;           // the reference deformer's parameters
+  ReferenceKind reference = ReferenceKind::delta_mush;  // for characters without file targets
+  DeltaMushParams delta_mush;           // the reference deformer's parameters (Delta Mush)
+  ArapParams arap;                      // (ARAP)
+  std::vector<FileTargetSource> targets;  // characters with file targets (at most one source each)
   std::int64_t subsample = 1000;        // DenseGATs: consecutive vertices per sample (<= 0: whole mesh)
   std::vector<int> distortion_scales;   // DenseGATs: detail-distortion columns (empty: the paper's features only)
   float validation = 0.1f, test = 0.1f;

@@ -7,10 +7,12 @@
 // one-ring adjacency for the distortion columns), the mesh graph, and the
 // detail-distortion rest details.
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
 #include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/deform/reference_deformer.hpp"
 #include "gatcore/character/features/features.hpp"
 #include "gatcore/character/rig/character.hpp"
 #include "gatcore/graph.hpp"
@@ -32,6 +34,11 @@ struct PreparedCharacter {
   // smoothing scales and the world-frame rest details, one per scale.
   std::vector<int> distortion_scales;
   std::vector<std::vector<float>> rest_details;
+  // Training only (data/): the targets' reference deformer when it is not
+  // the Delta Mush binding above (ARAP, or file targets with the pose of each
+  // of their frames); null: Delta Mush.
+  std::shared_ptr<const ReferenceDeformer> reference;
+  std::vector<Pose> target_poses;
 };
 PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {},
                                     std::span<const int> distortion_scales = {});
