@@ -27,11 +27,13 @@ V3 cross(const V3& a, const V3& b) {
 double norm(const V3& a) { return std::sqrt(dot(a, a)); }
 V3 to_v3(const Vec3& v) { return {v[0], v[1], v[2]}; }
 
-// Closest point to p on segment [a, b].
-V3 closest_on_segment(const V3& p, const V3& a, const V3& b) {
+// Closest point to p on segment [a, b]; *past_tail: p projects beyond b.
+V3 closest_on_segment(const V3& p, const V3& a, const V3& b, bool* past_tail) {
   const V3 ab = sub(b, a);
   const double l2 = dot(ab, ab);
-  const double t = l2 > 0 ? std::clamp(dot(sub(p, a), ab) / l2, 0.0, 1.0) : 0.0;
+  const double t0 = l2 > 0 ? dot(sub(p, a), ab) / l2 : 0.0;
+  *past_tail = l2 > 0 && t0 >= 1.0;
+  const double t = std::clamp(t0, 0.0, 1.0);
   return {a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
 }
 
@@ -124,6 +126,9 @@ struct Bvh {
     return t > 1e-6 && t < 1 - 1e-6;
   }
 
+  // Does the ray from p along d (within length |d|) hit any triangle?
+  bool hits(const V3& p, const V3& d) const { return blocked(p, {p[0] + d[0], p[1] + d[1], p[2] + d[2]}, -1); }
+
   bool blocked(const V3& p, const V3& q, std::int32_t vertex) const {
     if (nodes.empty()) return false;
     const V3 d = sub(q, p);
@@ -151,21 +156,67 @@ struct Bvh {
 
 }  // namespace
 
-std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s) {
+std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float branch_cos, float leaf_extension) {
   const std::int32_t nj = s.num_joints();
   GATCORE_CHECK(static_cast<std::int32_t>(s.inverse_bind.size()) == nj, "bone_segments: ", s.inverse_bind.size(),
                 " inverse bind matrices for ", nj, " joints");
+  std::vector<Mat4> bind(static_cast<std::size_t>(nj));
   std::vector<Vec3> head(static_cast<std::size_t>(nj));
-  for (std::int32_t j = 0; j < nj; ++j) head[j] = mat4_translation(inverse(s.inverse_bind[j]));
+  for (std::int32_t j = 0; j < nj; ++j) {
+    bind[j] = inverse(s.inverse_bind[j]);
+    head[j] = mat4_translation(bind[j]);
+  }
   const auto children = s.children();
+  auto dir = [&](std::int32_t a, std::int32_t b) {
+    V3 d = sub(to_v3(head[b]), to_v3(head[a]));
+    const double l = norm(d);
+    if (l > 0)
+      for (double& x : d) x /= l;
+    return d;
+  };
+  // The rig's own bone-axis convention (Blender: local +Y along the bone;
+  // many FBX rigs: +X): the signed local axis that best points from a joint
+  // to its only child, by vote over the joints with one child. A leaf's bone
+  // follows that axis of its own frame (a foot without toe joints points
+  // forward, not down its shin).
+  auto axis = [&](std::int32_t j, int a) {
+    V3 d{bind[j][4 * (a / 2)], bind[j][4 * (a / 2) + 1], bind[j][4 * (a / 2) + 2]};
+    const double l = norm(d), sg = a % 2 ? -1.0 : 1.0;
+    for (double& x : d) x = l > 0 ? sg * x / l : 0.0;
+    return d;
+  };
+  int votes[6] = {0, 0, 0, 0, 0, 0};
+  for (std::int32_t j = 0; j < nj; ++j) {
+    if (children[j].size() != 1) continue;
+    const V3 d = dir(j, children[j][0]);
+    if (norm(d) == 0) continue;
+    int best = 0;
+    for (int a = 1; a < 6; ++a)
+      if (dot(axis(j, a), d) > dot(axis(j, best), d)) best = a;
+    ++votes[best];
+  }
+  const int conv = static_cast<int>(std::max_element(votes, votes + 6) - votes);
+  const bool have_conv = votes[conv] > 0;
   std::vector<std::vector<BoneSegment>> seg(static_cast<std::size_t>(nj));
   for (std::int32_t j = 0; j < nj; ++j) {
-    for (std::int32_t c : children[j]) seg[j].push_back({head[j], head[c]});
-    if (!children[j].empty()) continue;
     const std::int32_t p = s.parents[j];
+    // Branches (a child turning away from the parent's direction, like the
+    // shoulders off the neck) are their own bones, not this joint's.
+    std::int32_t best = -1;
+    double best_cos = -2;
+    for (std::int32_t c : children[j]) {
+      const double cs = p >= 0 ? dot(dir(p, j), dir(j, c)) : 1.0;
+      if (cs >= branch_cos) seg[j].push_back({head[j], head[c]});
+      if (cs > best_cos) best_cos = cs, best = c;
+    }
+    if (seg[j].empty() && best >= 0) seg[j].push_back({head[j], head[best]});
+    if (!children[j].empty()) continue;
     Vec3 tail = head[j];
-    if (p >= 0)
-      for (int c = 0; c < 3; ++c) tail[c] += 0.5f * (head[j][c] - head[p][c]);
+    if (p >= 0) {
+      const double len = leaf_extension * norm(sub(to_v3(head[j]), to_v3(head[p])));
+      const V3 d = have_conv ? axis(j, conv) : dir(p, j);
+      for (int c = 0; c < 3; ++c) tail[c] += static_cast<float>(len * d[c]);
+    }
     seg[j].push_back({head[j], tail});
   }
   return seg;
@@ -238,14 +289,47 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   }
 
   // Bones.
-  const auto segs = bone_segments(sk);
+  const auto segs = bone_segments(sk, params.branch_cos, params.leaf_extension);
   struct Seg {
     V3 a, b;
     std::int32_t joint;
   };
   std::vector<Seg> bones;
+  Bvh bvh;
+  bvh.build(pos, tris);
+  std::vector<std::uint8_t> deforming = params.deforming;
+  if (deforming.empty()) {
+    // A root joint outside the mesh (Unreal's or Rigify's "root" at the floor)
+    // is a control, not a bone: its segments would run through the legs.
+    // Outside = fewer than half of the points sampled along its segments
+    // (t = 0.1, 0.3, ..., 0.9) are enclosed (every axis ray from the point
+    // hits the mesh).
+    deforming.assign(static_cast<std::size_t>(nj), 1);
+    auto enclosed = [&](const V3& x) {
+      for (int a = 0; a < 3; ++a)
+        for (double sgn : {-1.0, 1.0}) {
+          V3 d{0, 0, 0};
+          d[a] = 2 * sgn * diag;
+          if (!bvh.hits(x, d)) return false;
+        }
+      return true;
+    };
+    for (std::int32_t j = 0; j < nj; ++j) {
+      if (sk.parents[j] >= 0 || tris.empty()) continue;
+      int in = 0, all = 0;
+      for (const auto& sg : segs[j]) {
+        const V3 a = to_v3(sg.a), b = to_v3(sg.b);
+        for (double t = 0.1; t < 1; t += 0.2, ++all)
+          in += enclosed({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])});
+      }
+      if (2 * in < all) deforming[j] = 0;
+    }
+    std::int32_t kept = 0;
+    for (auto x : deforming) kept += x;
+    if (kept == 0) std::fill(deforming.begin(), deforming.end(), 1);  // only controls: use them
+  }
   for (std::int32_t j = 0; j < nj; ++j) {
-    if (!params.deforming.empty() && !params.deforming[j]) continue;
+    if (!deforming[j]) continue;
     for (const auto& s : segs[j]) bones.push_back({to_v3(s.a), to_v3(s.b), j});
   }
   GATCORE_CHECK(!bones.empty(), ch.name, ": bone heat: no joint deforms");
@@ -282,8 +366,6 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
     if (!(a > 0)) a = mean_area;
 
   // Nearest (visible) bone per vertex.
-  Bvh bvh;
-  if (params.visibility) bvh.build(pos, tris);
   const double dmin = 1e-4 * diag;  // vertices on a bone: finite heat
   std::vector<double> h(static_cast<std::size_t>(m), 0.0);
   std::vector<std::vector<std::pair<std::int32_t, double>>> target(static_cast<std::size_t>(m));
@@ -301,8 +383,12 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   for (std::int32_t v = 0; v < m; ++v) {
     cand.clear();
     for (std::size_t b = 0; b < bones.size(); ++b) {
-      closest[b] = closest_on_segment(pos[v], bones[b].a, bones[b].b);
-      cand.push_back({norm(sub(closest[b], pos[v])), static_cast<std::int32_t>(b)});
+      bool past = false;
+      closest[b] = closest_on_segment(pos[v], bones[b].a, bones[b].b, &past);
+      // Past a bone's tail the vertex is as near to the child's head: the
+      // child (a leaf foot beyond the shin's end) wins the tie.
+      const double d = norm(sub(closest[b], pos[v]));
+      cand.push_back({past ? d * 1.001 + 1e-9 * diag : d, static_cast<std::int32_t>(b)});
     }
     std::sort(cand.begin(), cand.end());
     nearest_any[v] = std::max(cand[0].first, dmin);

@@ -35,6 +35,14 @@ struct BoneHeatParams {
   bool visibility = true;   // a bone only heats vertices that see it (the segment to it crosses no triangle)
   int max_influences = 4;   // kept per vertex (largest), renormalised
   float min_weight = 0.01f; // influences below this fraction of the vertex's total dropped
+  // A child whose direction from the joint makes a cosine below this with the
+  // parent's bone is a branch (shoulders off the neck, legs off a root at the
+  // floor): not one of the joint's segments. -1 keeps every child.
+  float branch_cos = 0.5f;
+  // A leaf joint's segment continues its parent's direction for this fraction
+  // of the parent's length (0: the joint's point; a vertex past its parent's
+  // tail then goes to it).
+  float leaf_extension = 0.5f;
   // Joints that may receive weight ([num_joints], 1 = deforms); empty = all.
   std::vector<std::uint8_t> deforming;
 };
@@ -49,6 +57,7 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params 
 struct BoneSegment {
   Vec3 a, b;
 };
-std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s);
+std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float branch_cos = 0.5f,
+                                                   float leaf_extension = 0.5f);
 
 }  // namespace gatcore::character
