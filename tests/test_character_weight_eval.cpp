@@ -65,6 +65,7 @@ TEST_CASE("weight evaluation of a perfect prediction is exact", "[character][wei
   CHECK(r.weights.l1_mean == 0.0);
   CHECK(r.deformation.mean == 0.0);
   CHECK(r.deformation.max == 0.0);
+  CHECK(r.dominant == 1.0);
 }
 
 TEST_CASE("weight evaluation: everything on the root bone, hand-computed", "[character][weighteval]") {
@@ -87,6 +88,26 @@ TEST_CASE("weight evaluation: everything on the root bone, hand-computed", "[cha
   CHECK(r.weights.l1_max == Approx(2.0));
   CHECK(r.vertex_l1.back() == Approx(2.0f));  // the top cap centre
   CHECK(r.vertex_l1.front() == 0.0f);
+  CHECK(r.dominant == Approx(double(lower) / double(n)));
+
+  // --min-weight: 0.9 on the truth plus 0.1 on the other bone everywhere.
+  // Unpruned every vertex selects both bones (precision 0.5, L1 0.2);
+  // pruned at 0.2 the prediction is exact.
+  std::vector<float> blurred(truth.size(), 0.0f);
+  for (std::int64_t v = 0; v < n; ++v) {
+    const bool up = truth[v * 3 + 2] > 0.5f;
+    blurred[v * 3 + (up ? 2 : 0)] = 0.9f;
+    blurred[v * 3 + (up ? 0 : 2)] = 0.1f;
+  }
+  const auto rb = evaluate_character_weights(pc, blurred, truth, 3, kJointToBone, kMask, o);
+  CHECK(rb.weights.precision == Approx(0.5));
+  CHECK(rb.weights.l1_mean == Approx(0.2));
+  CHECK(rb.dominant == 1.0);
+  WeightEvalOptions pruned = o;
+  pruned.min_weight = 0.2f;
+  const auto rp = evaluate_character_weights(pc, blurred, truth, 3, kJointToBone, kMask, pruned);
+  CHECK(rp.weights.precision == 1.0);
+  CHECK(rp.weights.l1_mean == Approx(0.0).margin(1e-7));
 
   // bone1 turned 90 degrees about +z: an upper vertex p = (x, y - 1, z)
   // relative to the joint goes to (-(y - 1), x, z), the root-weighted
@@ -127,6 +148,7 @@ TEST_CASE("weight evaluation: summary, Markdown and JSON", "[character][weightev
   b.vertices = 20;
   b.weights = {0.7, 0.8, 0.4, 1.0};
   b.deformation.mean = 0.03, b.deformation.max = 0.05;
+  a.dominant = 0.9, b.dominant = 0.7;
   const auto s = summarise_weight_eval({a, b});
   CHECK(s.characters == 2);
   CHECK(s.precision == Approx(0.6));
@@ -135,14 +157,16 @@ TEST_CASE("weight evaluation: summary, Markdown and JSON", "[character][weightev
   CHECK(s.l1_max == Approx(1.5));
   CHECK(s.deform_mean == Approx(0.02));
   CHECK(s.deform_max == Approx(0.1));
+  CHECK(s.dominant == Approx(0.8));
   const std::string md = weight_eval_markdown({a, b});
-  CHECK_THAT(md, Contains("| men/A | 10 | 0.500 | 1.000 | 0.2000 | 1.5000 | 0.01000 | 0.1000 |"));
-  CHECK_THAT(md, Contains("| **overall** |  | 0.600 | 0.900 | 0.3000 | 1.5000 | 0.02000 | 0.1000 |"));
+  CHECK_THAT(md, Contains("| men/A | 10 | 0.500 | 1.000 | 0.2000 | 1.5000 | 0.01000 | 0.1000 | 0.900 |"));
+  CHECK_THAT(md, Contains("| **overall** |  | 0.600 | 0.900 | 0.3000 | 1.5000 | 0.02000 | 0.1000 | 0.800 |"));
   const auto j = nlohmann::json::parse(weight_eval_json("fc", {a, b}, WeightEvalOptions{}));
   CHECK(j.at("method") == "fc");
   CHECK(j.at("characters").size() == 2);
   CHECK(j.at("characters")[1].at("name") == "women/B");
   CHECK(j.at("overall").at("recall").get<double>() == Approx(0.9));
+  CHECK(j.at("overall").at("dominant").get<double>() == Approx(0.8));
   const auto path = (std::filesystem::temp_directory_path() / "gatcore_weight_eval.json").string();
   write_text_atomic(path, "{}\n");
   std::ifstream f(path);

@@ -14,6 +14,7 @@
 
 #include "commands.hpp"
 #include "eval_motion.hpp"
+#include "eval_weight_baseline.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/viz/render.hpp"
@@ -30,7 +31,8 @@ namespace {
 int usage(int rc) {
   std::fprintf(rc ? stderr : stdout,
                "usage: gat eval --model FILE [--samples N] [--seed S] [--data DATASET] [--part P]\n"
-               "                [--device cpu|vulkan|auto]\n"
+               "                [--device cpu|vulkan|auto] [--min-weight W]\n"
+               "       gat eval --baseline bone-heat --data DATASET [--part P] [--poses K] [--min-weight W] [--json FILE]\n"
                "  Evaluates a checkpoint written by gat train on N held-out samples (default 16) of the\n"
                "  embedded tube data (seed S, default 12345; not the training seeds): loss, and per-vertex\n"
                "  error (displacements, in mesh units) or L1 weight error / bone precision and recall\n"
@@ -44,6 +46,10 @@ int usage(int rc) {
                "  --poses K       random poses per character for the deformation error (default 16; the\n"
                "                  dataset's pose angle; pose seed = --seed)\n"
                "  --json FILE     also write the table as JSON\n"
+               "  --min-weight W  drop predicted influences below W of the vertex's total (renormalised) before\n"
+               "                  the metrics (default 0; bone heat: 0.01)\n"
+               "  --baseline bone-heat  the same table for a classical method instead of a model: Baran &\n"
+               "                  Popovic's bone heat (Blender's automatic weights), top 4 influences\n"
                "  --errormaps DIR per-vertex L1 weight-error colour maps, DIR/<character>.png\n"
                "  --size PX       error-map size (default 320)\n"
                "  --device D      cpu (default), vulkan or auto: where the model runs (see gat train --help)\n"
@@ -59,8 +65,9 @@ int gat::cmd_eval(int argc, char** argv) {
   // Motion evaluation against the reference deformer, with baselines (eval_motion.cpp).
   for (int i = 1; i < argc; ++i)
     if (!std::strcmp(argv[i], "--motion") || !std::strcmp(argv[i], "--targets")) return gat::eval_motion(argc, argv);
-  std::string path, data, part = "test", device = "cpu", json_path, errormap_dir;
+  std::string path, data, part = "test", device = "cpu", json_path, errormap_dir, baseline;
   long samples = 16, seed = 12345, poses = 16, size = 320;
+  double min_weight = -1;
   for (int i = 1; i < argc; ++i) {
     const bool v = i + 1 < argc;
     if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help")) return usage(0);
@@ -73,6 +80,15 @@ int gat::cmd_eval(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--size") && v) size = std::strtol(argv[++i], nullptr, 10);
     else if (!std::strcmp(argv[i], "--json") && v) json_path = argv[++i];
     else if (!std::strcmp(argv[i], "--errormaps") && v) errormap_dir = argv[++i];
+    else if (!std::strcmp(argv[i], "--baseline") && v) baseline = argv[++i];
+    else if (!std::strcmp(argv[i], "--min-weight") && v) {
+      char* end = nullptr;
+      min_weight = std::strtod(argv[++i], &end);
+      if (*end || !(min_weight >= 0 && min_weight < 1)) {
+        std::fprintf(stderr, "gat eval: --min-weight expects a number in [0, 1), got '%s'\n", argv[i]);
+        return 2;
+      }
+    }
     else if (!std::strcmp(argv[i], "--device") && v) {
       device = argv[++i];
       if (device != "cpu" && device != "vulkan" && device != "auto") {
@@ -85,8 +101,9 @@ int gat::cmd_eval(int argc, char** argv) {
       return usage(2);
     }
   }
+  if (!baseline.empty()) return gat::eval_weight_baseline(baseline, data, part, poses, seed, min_weight, json_path);
   if (path.empty()) {
-    std::fprintf(stderr, "gat eval: --model FILE is required\n");
+    std::fprintf(stderr, "gat eval: --model FILE (or --baseline) is required\n");
     return usage(2);
   }
   if (samples < 1 || samples > 1000000) {
@@ -211,8 +228,9 @@ int gat::cmd_eval(int argc, char** argv) {
       eo.poses = int(poses);
       eo.pose_angle = td.description.pose_angle;
       eo.seed = std::uint32_t(seed);
+      eo.min_weight = min_weight > 0 ? float(min_weight) : 0.0f;
       // Each character on the rank that predicted it; the figures gathered as above.
-      constexpr std::size_t kFields = 10;
+      constexpr std::size_t kFields = 11;
       std::vector<double> fields(data_.size() * kFields, 0.0);
       std::vector<character::CharacterWeightEval> per(data_.size());
       for (std::size_t i = 0; i < data_.size(); ++i) {
@@ -242,7 +260,7 @@ int gat::cmd_eval(int argc, char** argv) {
         }
         const double f[kFields] = {double(r.vertices), r.height, r.weights.precision, r.weights.recall,
                                    r.weights.l1_mean, r.weights.l1_max, r.deformation.mean, r.deformation.max,
-                                   r.deformation.min, double(r.deformation.count)};
+                                   r.deformation.min, double(r.deformation.count), r.dominant};
         std::copy(f, f + kFields, fields.begin() + std::ptrdiff_t(i * kFields));
       }
       comm.sum(fields.data(), fields.size());
@@ -253,6 +271,7 @@ int gat::cmd_eval(int argc, char** argv) {
         r.weights = {f[2], f[3], f[4], f[5]};
         r.deformation.mean = f[6], r.deformation.max = f[7], r.deformation.min = f[8];
         r.deformation.count = std::int64_t(f[9]);
+        r.dominant = f[10];
         if (!errormap_dir.empty()) {
           std::string file = r.name;
           std::replace(file.begin(), file.end(), '/', '_');

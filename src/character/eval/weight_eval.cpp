@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/rig/limit_weights.hpp"
 #include "gatcore/character/rig/motion.hpp"
 #include "gatcore/atomic_file.hpp"
 #include "gatcore/error.hpp"
@@ -52,16 +53,38 @@ SkinWeights weights_from_super(std::span<const float> dense, std::int64_t num_bo
   return w;
 }
 
-CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std::span<const float> predicted,
+double dominant_accuracy(std::span<const float> predicted, std::span<const float> truth, std::int64_t cols,
+                         std::span<const std::uint8_t> mask) {
+  GATCORE_CHECK(cols > 0 && predicted.size() == truth.size() && predicted.size() % static_cast<std::size_t>(cols) == 0,
+                "dominant_accuracy: ", predicted.size(), " predicted and ", truth.size(), " true values for ", cols,
+                " columns");
+  GATCORE_CHECK(mask.empty() || static_cast<std::int64_t>(mask.size()) == cols, "dominant_accuracy: mask has ",
+                mask.size(), " entries for ", cols, " columns");
+  const std::int64_t n = static_cast<std::int64_t>(predicted.size()) / cols;
+  if (n == 0) return 0.0;
+  auto argmax = [&](std::span<const float> x, std::int64_t v) {
+    std::int64_t best = -1;
+    for (std::int64_t b = 0; b < cols; ++b) {
+      if (!mask.empty() && !mask[static_cast<std::size_t>(b)]) continue;
+      if (best < 0 || x[static_cast<std::size_t>(v * cols + b)] > x[static_cast<std::size_t>(v * cols + best)]) best = b;
+    }
+    return best;
+  };
+  std::int64_t right = 0;
+  for (std::int64_t v = 0; v < n; ++v) right += argmax(predicted, v) == argmax(truth, v);
+  return static_cast<double>(right) / static_cast<double>(n);
+}
+
+CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std::span<const float> predicted_in,
                                                std::span<const float> truth, std::int64_t num_bones,
                                                const std::vector<std::int32_t>& joint_to_bone,
                                                std::span<const std::uint8_t> mask, const WeightEvalOptions& opts,
                                                std::int32_t character_index) {
   const Mesh& mesh = pc.character.mesh;
   const std::int64_t n = mesh.num_vertices();
-  GATCORE_CHECK(static_cast<std::int64_t>(predicted.size()) == n * num_bones &&
+  GATCORE_CHECK(static_cast<std::int64_t>(predicted_in.size()) == n * num_bones &&
                     static_cast<std::int64_t>(truth.size()) == n * num_bones,
-                "evaluate_character_weights: ", predicted.size(), " predicted and ", truth.size(),
+                "evaluate_character_weights: ", predicted_in.size(), " predicted and ", truth.size(),
                 " true weights for ", n, " vertices x ", num_bones, " bones");
   GATCORE_CHECK(static_cast<std::int32_t>(joint_to_bone.size()) == pc.character.skeleton.num_joints(),
                 "evaluate_character_weights: joint_to_bone has ", joint_to_bone.size(), " entries for ",
@@ -70,10 +93,18 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
                 opts.worst);
   GATCORE_CHECK(pc.norm.scale > 0.0f && std::isfinite(pc.norm.scale), "evaluate_character_weights: character scale ",
                 pc.norm.scale);
+  std::vector<float> pruned;
+  std::span<const float> predicted = predicted_in;
+  if (opts.min_weight > 0.0f) {
+    pruned.assign(predicted_in.begin(), predicted_in.end());
+    limit_weights_dense(pruned, num_bones, static_cast<int>(num_bones), opts.min_weight, mask);
+    predicted = pruned;
+  }
   CharacterWeightEval r;
   r.vertices = n;
   r.height = 1.0 / static_cast<double>(pc.norm.scale);
   r.weights = weight_metrics(predicted, truth, num_bones, opts.threshold, mask);
+  r.dominant = dominant_accuracy(predicted, truth, num_bones, mask);
   r.vertex_l1.resize(static_cast<std::size_t>(n));
   for (std::int64_t v = 0; v < n; ++v) {
     double l1 = 0;
@@ -131,12 +162,13 @@ WeightEvalSummary summarise_weight_eval(const std::vector<CharacterWeightEval>& 
     s.recall += c.weights.recall;
     s.l1_mean += c.weights.l1_mean;
     s.deform_mean += c.deformation.mean;
+    s.dominant += c.dominant;
     s.l1_max = std::max(s.l1_max, c.weights.l1_max);
     s.deform_max = std::max(s.deform_max, c.deformation.max);
   }
   if (s.characters > 0) {
     const double k = static_cast<double>(s.characters);
-    s.precision /= k, s.recall /= k, s.l1_mean /= k, s.deform_mean /= k;
+    s.precision /= k, s.recall /= k, s.l1_mean /= k, s.deform_mean /= k, s.dominant /= k;
   }
   return s;
 }
@@ -150,22 +182,24 @@ std::string fmt(const char* f, double x) {
 }
 
 std::string row(const std::string& name, const std::string& vertices, double p, double r, double l1m, double l1x,
-                double dm, double dx) {
+                double dm, double dx, double dom) {
   return "| " + name + " | " + vertices + " | " + fmt("%.3f", p) + " | " + fmt("%.3f", r) + " | " +
-         fmt("%.4f", l1m) + " | " + fmt("%.4f", l1x) + " | " + fmt("%.5f", dm) + " | " + fmt("%.4f", dx) + " |\n";
+         fmt("%.4f", l1m) + " | " + fmt("%.4f", l1x) + " | " + fmt("%.5f", dm) + " | " + fmt("%.4f", dx) + " | " +
+         fmt("%.3f", dom) + " |\n";
 }
 
 }  // namespace
 
 std::string weight_eval_markdown(const std::vector<CharacterWeightEval>& per_character) {
   std::string s =
-      "| character | vertices | precision | recall | L1 mean | L1 max | deform. mean / height | deform. max / height |\n"
-      "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+      "| character | vertices | precision | recall | L1 mean | L1 max | deform. mean / height | deform. max / height | "
+      "dominant bone |\n"
+      "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const auto& c : per_character)
     s += row(c.name, std::to_string(c.vertices), c.weights.precision, c.weights.recall, c.weights.l1_mean,
-             c.weights.l1_max, c.deformation.mean, c.deformation.max);
+             c.weights.l1_max, c.deformation.mean, c.deformation.max, c.dominant);
   const WeightEvalSummary o = summarise_weight_eval(per_character);
-  s += row("**overall**", "", o.precision, o.recall, o.l1_mean, o.l1_max, o.deform_mean, o.deform_max);
+  s += row("**overall**", "", o.precision, o.recall, o.l1_mean, o.l1_max, o.deform_mean, o.deform_max, o.dominant);
   return s;
 }
 
@@ -174,7 +208,8 @@ std::string weight_eval_json(const std::string& method, const std::vector<Charac
   nlohmann::json j;
   j["method"] = method;
   j["options"] = {{"poses", opts.poses},   {"pose_angle", opts.pose_angle}, {"seed", opts.seed},
-                  {"threshold", opts.threshold}, {"worst", opts.worst}};
+                  {"threshold", opts.threshold}, {"worst", opts.worst},
+                  {"min_weight", opts.min_weight}};
   j["characters"] = nlohmann::json::array();
   for (const auto& c : per_character)
     j["characters"].push_back({{"name", c.name},
@@ -185,11 +220,12 @@ std::string weight_eval_json(const std::string& method, const std::vector<Charac
                                {"l1_mean", c.weights.l1_mean},
                                {"l1_max", c.weights.l1_max},
                                {"deform_mean", c.deformation.mean},
-                               {"deform_max", c.deformation.max}});
+                               {"deform_max", c.deformation.max},
+                               {"dominant", c.dominant}});
   const WeightEvalSummary o = summarise_weight_eval(per_character);
   j["overall"] = {{"characters", o.characters}, {"precision", o.precision},     {"recall", o.recall},
                   {"l1_mean", o.l1_mean},       {"l1_max", o.l1_max},           {"deform_mean", o.deform_mean},
-                  {"deform_max", o.deform_max}};
+                  {"deform_max", o.deform_max}, {"dominant", o.dominant}};
   return j.dump(2) + "\n";
 }
 

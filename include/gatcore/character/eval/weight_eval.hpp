@@ -21,6 +21,11 @@ struct WeightEvalOptions {
   std::uint32_t seed = 0;    // pose generator seed (per character: seed ^ character index)
   double threshold = 1e-4;   // bone selected by the prediction when its weight > threshold
   int worst = 2;             // poses pooled for the deformation error
+  // Influences of the prediction below this fraction of the vertex's total
+  // are dropped (renormalised) before every metric (limit_weights_dense);
+  // 0 keeps them all. Artists often use about 2 influences per vertex, so a
+  // forced top-4 caps precision near 0.5 (issue #15).
+  float min_weight = 0.0f;
 };
 
 struct CharacterWeightEval {
@@ -30,6 +35,7 @@ struct CharacterWeightEval {
   WeightMetrics weights;        // precision / recall / L1 over the character's own bones
   DistanceStats deformation;    // worst poses, mean / max / min divided by height
   std::vector<float> vertex_l1; // per-vertex L1 weight error (for error maps)
+  double dominant = 0;          // fraction of vertices whose largest predicted bone is the artist's largest
 };
 
 // Dense [n x num_bones] super-skeleton weights -> the character's joints
@@ -58,11 +64,17 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
                                                std::int32_t character_index = 0);
 
 // Overall figures over characters: the mean of the per-character precision,
-// recall, L1 mean and deformation mean; the maximum of the maxima.
+// recall, L1 mean, deformation mean and dominant-bone accuracy; the maximum
+// of the maxima.
 struct WeightEvalSummary {
   int characters = 0;
-  double precision = 0, recall = 0, l1_mean = 0, l1_max = 0, deform_mean = 0, deform_max = 0;
+  double precision = 0, recall = 0, l1_mean = 0, l1_max = 0, deform_mean = 0, deform_max = 0, dominant = 0;
 };
+
+// Fraction of the n rows whose largest entry (over `mask`) is at the same
+// column in `predicted` and `truth` (ties: the first column).
+double dominant_accuracy(std::span<const float> predicted, std::span<const float> truth, std::int64_t cols,
+                         std::span<const std::uint8_t> mask = {});
 WeightEvalSummary summarise_weight_eval(const std::vector<CharacterWeightEval>& per_character);
 
 // A Markdown table: one row per character and an "overall" row.

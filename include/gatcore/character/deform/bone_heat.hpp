@@ -1,0 +1,63 @@
+#pragma once
+// Bone heat (Baran & Popovic 2007, "Automatic rigging and animation of 3D
+// characters"; the method behind Blender's automatic weights): the weight of
+// joint i is the equilibrium of heat diffusing over the mesh surface from the
+// joint's bones,
+//     (-Laplacian + H) w_i = H p_i,
+// H_vv = c / d_v^2 with d_v the distance from vertex v to its nearest visible
+// bone (0 when none is visible: the vertex only receives diffused heat),
+// p_i(v) = 1 when that bone is joint i's (split evenly among ties). The
+// Laplacian is the cotangent one with lumped (barycentric) areas; one sparse
+// LDLT factorisation per character, one solve per joint.
+//
+// Bones: joint j deforms the segments from its bind position to each child's;
+// a leaf joint the segment continuing its parent's direction for half the
+// parent's length (a lone joint: its point). Positions come from the inverse
+// bind matrices, so the mesh must be in the bind frame the skin uses (both the
+// loaded and the world-frame prepared character are).
+//
+// Robustness for dressed, multi-mesh, non-manifold characters: vertices at the
+// same position are welded for the diffusion (cracks between mesh pieces do not
+// block heat), cotangents are clamped to [0, 1e3] (obtuse and degenerate
+// triangles keep the system an M-matrix: weights stay in [0, 1]), and a mesh
+// piece where no vertex sees a bone (a garment whose every ray to the bones
+// crosses the body) is bound to its nearest bones regardless of visibility, so
+// no vertex is left without weights.
+#include <cstdint>
+#include <vector>
+
+#include "gatcore/character/rig/character.hpp"
+
+namespace gatcore::character {
+
+struct BoneHeatParams {
+  float heat = 1.0f;        // c in H = c / d^2 (Baran & Popovic: 1)
+  bool visibility = true;   // a bone only heats vertices that see it (the segment to it crosses no triangle)
+  int max_influences = 4;   // kept per vertex (largest), renormalised
+  float min_weight = 0.01f; // influences below this fraction of the vertex's total dropped
+  // A child whose direction from the joint makes a cosine below this with the
+  // parent's bone is a branch (shoulders off the neck, legs off a root at the
+  // floor): not one of the joint's segments. -1 keeps every child.
+  float branch_cos = 0.5f;
+  // A leaf joint's segment continues its parent's direction for this fraction
+  // of the parent's length (0: the joint's point; a vertex past its parent's
+  // tail then goes to it).
+  float leaf_extension = 0.5f;
+  // Joints that may receive weight ([num_joints], 1 = deforms); empty = all.
+  std::vector<std::uint8_t> deforming;
+};
+
+// Per-vertex weights over the character's joints (each vertex: 1..max_influences
+// joints, summing to 1). Throws InvalidArgument naming the character when the
+// mesh or skeleton is invalid or no joint deforms.
+SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params = {});
+
+// The bone segments of every joint (see above), bind frame: per joint a list
+// of (head, tail) pairs.
+struct BoneSegment {
+  Vec3 a, b;
+};
+std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float branch_cos = 0.5f,
+                                                   float leaf_extension = 0.5f);
+
+}  // namespace gatcore::character

@@ -1,0 +1,156 @@
+// Bone heat (deform/bone_heat.hpp) against the analytic falloff on a two-bone
+// tube, and its robustness guarantees (garments that see no bone, isolated
+// vertices, duplicated seam vertices); influence limits (rig/limit_weights.hpp).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <map>
+
+#include "character_fixtures.hpp"
+#include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/rig/limit_weights.hpp"
+#include "gatcore/error.hpp"
+
+using namespace gatcore::character;
+
+namespace {
+
+float weight_of(const SkinWeights& w, std::int64_t v, std::int32_t j) {
+  for (std::int64_t k = w.ptr[v]; k < w.ptr[v + 1]; ++k)
+    if (w.joint[k] == j) return w.weight[k];
+  return 0.0f;
+}
+
+void check_partition(const SkinWeights& w, std::int64_t n, std::int32_t joints) {
+  REQUIRE(w.num_vertices() == n);
+  for (std::int64_t v = 0; v < n; ++v) {
+    REQUIRE(w.ptr[v + 1] > w.ptr[v]);  // no vertex without weights
+    double s = 0;
+    for (std::int64_t k = w.ptr[v]; k < w.ptr[v + 1]; ++k) {
+      REQUIRE(w.joint[k] >= 0);
+      REQUIRE(w.joint[k] < joints);
+      REQUIRE(w.weight[k] > 0.0f);
+      s += w.weight[k];
+    }
+    REQUIRE(s == Approx(1.0).epsilon(1e-5));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("bone heat on a two-bone tube follows the analytic exponential falloff", "[bone_heat]") {
+  // Tube y in [0, 2], radius r = 0.25, joints at y = 0 and 1. Every side
+  // vertex is at distance r from its nearest bone (root below y = 1, bone1
+  // above), so H = 1 / r^2 and, axially symmetric, -w'' + (w - p) / r^2 = 0:
+  // w_bone1(y) = 0.5 exp(-(1 - y) / r) below the joint and
+  // 1 - 0.5 exp(-(y - 1) / r) above it.
+  const float r = 0.25f;
+  const int rings = 81, segments = 32;
+  const Character ch = charfix::tube_character(rings, segments, 2.0f, r, 0.0f);
+  BoneHeatParams p;
+  p.max_influences = 2;
+  p.min_weight = 0.0f;
+  const SkinWeights w = bone_heat_weights(ch, p);
+  check_partition(w, ch.mesh.num_vertices(), 2);
+  double max_err = 0;
+  int checked = 0;
+  for (int ring = 0; ring < rings; ++ring) {
+    const double y = 2.0 * ring / (rings - 1);
+    if (y < 0.4 || y > 1.6 || std::abs(y - 1.0) < 1e-6) continue;
+    const double expect = y < 1 ? 0.5 * std::exp(-(1 - y) / r) : 1 - 0.5 * std::exp(-(y - 1) / r);
+    for (int c = 0; c < segments; ++c) {
+      const std::int64_t v = static_cast<std::int64_t>(ring) * segments + c;
+      REQUIRE(std::abs(ch.mesh.positions[3 * v + 1] - y) < 1e-5);
+      max_err = std::max(max_err, std::abs(double(weight_of(w, v, 1)) - expect));
+      ++checked;
+    }
+  }
+  REQUIRE(checked > 0);
+  INFO("max |w - analytic| = " << max_err);
+  CHECK(max_err < 0.03);
+  // Symmetric about the joint, monotone along the tube.
+  for (int ring = 1; ring < rings; ++ring)
+    CHECK(weight_of(w, ring * segments, 1) >= weight_of(w, (ring - 1) * segments, 1) - 1e-6f);
+  // A four times stronger heat halves the falloff length: sharper at y = 0.8.
+  p.heat = 4.0f;
+  const SkinWeights sharp = bone_heat_weights(ch, p);
+  const int ring08 = static_cast<int>(std::lround(0.8 * (rings - 1) / 2.0));
+  const double y08 = 2.0 * ring08 / (rings - 1);
+  CHECK(weight_of(sharp, ring08 * segments, 1) == Approx(0.5 * std::exp(-2 * (1 - y08) / r)).margin(0.03));
+}
+
+TEST_CASE("bone heat leaves no vertex without weights on garments, seams and loose vertices", "[bone_heat]") {
+  Character ch = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  const std::int64_t body = ch.mesh.num_vertices();
+  // A sleeve (radius 0.35, y in [0.5, 1.5], with a UV seam): every ray from
+  // it to a bone crosses the body tube, so no vertex of it sees a bone.
+  const charfix::Tube g = charfix::tube_geometry(8, 16, 1.0f, 0.35f, true, false, 0.0f);
+  for (std::size_t i = 0; i < g.pos.size(); ++i) ch.mesh.positions.push_back(g.pos[i] + (i % 3 == 1 ? 0.5f : 0.0f));
+  for (std::int32_t t : g.tris) ch.mesh.triangles.push_back(static_cast<std::int32_t>(body + t));
+  ch.mesh.positions.insert(ch.mesh.positions.end(), {1.0f, 1.0f, 1.0f});  // a vertex in no triangle
+  const std::int64_t n = ch.mesh.num_vertices();
+  ch.mesh.weights = SkinWeights{};
+  for (std::int64_t v = 0; v < n; ++v) {
+    ch.mesh.weights.joint.push_back(0);
+    ch.mesh.weights.weight.push_back(1.0f);
+    ch.mesh.weights.ptr.push_back(v + 1);
+  }
+  const SkinWeights w = bone_heat_weights(ch);
+  check_partition(w, n, 2);
+  // The sleeve is bound to its nearest bones (k = 1 / 0.35), with no heat
+  // flowing out of its open ends: w_bone1 = 0.5 cosh(k (y - 0.5)) / cosh(k / 2)
+  // below the joint, so 0.773 on root at y = 0.5, and the same on bone1 at 1.5.
+  const double expect = 1.0 - 0.5 / std::cosh(0.5 / 0.35);
+  CHECK(weight_of(w, body, 0) == Approx(expect).margin(0.03));
+  CHECK(weight_of(w, body + 7 * 17, 1) == Approx(expect).margin(0.03));
+  // Seam columns are duplicated positions: welded, so both copies agree.
+  for (std::int64_t v = body; v < body + 8 * 17; v += 17)
+    CHECK(weight_of(w, v, 1) == Approx(weight_of(w, v + 16, 1)).margin(1e-6));
+}
+
+TEST_CASE("bone heat names no joint but the character's, and rejects bad input", "[bone_heat]") {
+  Character ch = charfix::tube_character(12, 8, 2.0f, 0.25f, 0.0f);
+  const SkinWeights a = bone_heat_weights(ch);
+  ch.skeleton.names = {"Hips", "mixamorig:LeftUpLeg"};  // names play no part
+  const SkinWeights b = bone_heat_weights(ch);
+  CHECK(a.joint == b.joint);
+  CHECK(a.weight == b.weight);
+  BoneHeatParams only_root;
+  only_root.deforming = {1, 0};
+  const SkinWeights r = bone_heat_weights(ch, only_root);
+  for (std::int32_t j : r.joint) CHECK(j == 0);
+  BoneHeatParams none;
+  none.deforming = {0, 0};
+  CHECK_THROWS_AS(bone_heat_weights(ch, none), gatcore::InvalidArgument);
+  ch.mesh.positions[0] = std::nanf("");
+  CHECK_THROWS_AS(bone_heat_weights(ch), gatcore::InvalidArgument);
+}
+
+TEST_CASE("limit_weights keeps the largest influences above min_weight, renormalised", "[limit_weights]") {
+  SkinWeights w;
+  w.ptr = {0, 4, 5};
+  w.joint = {0, 1, 2, 3, 7};
+  w.weight = {0.5f, 0.3f, 0.15f, 0.05f, 1.0f};
+  const SkinWeights a = limit_weights(w, 3, 0.0f);
+  REQUIRE(a.ptr == std::vector<std::int64_t>{0, 3, 4});
+  CHECK(a.weight[0] == Approx(0.5 / 0.95));
+  CHECK(a.weight[2] == Approx(0.15 / 0.95));
+  const SkinWeights b = limit_weights(w, 4, 0.2f);  // 0.15 and 0.05 dropped
+  REQUIRE(b.ptr == std::vector<std::int64_t>{0, 2, 3});
+  CHECK(b.weight[0] == Approx(0.625));
+  CHECK(b.weight[1] == Approx(0.375));
+  const SkinWeights c = limit_weights(w, 4, 0.9f);  // the largest always stays
+  REQUIRE(c.ptr == std::vector<std::int64_t>{0, 1, 2});
+  CHECK(c.joint[0] == 0);
+  CHECK(c.weight[0] == 1.0f);
+  std::vector<float> dense{0.5f, 0.3f, 0.15f, 0.05f, 0.f, 0.f, 0.f, 0.f};
+  const std::vector<std::uint8_t> mask{1, 0, 1, 1};
+  limit_weights_dense(dense, 4, 4, 0.2f, mask);  // bone 1 masked: 0.5, 0.15 (0.05 < 0.2 * 0.7)
+  CHECK(dense[0] == Approx(0.5 / 0.65));
+  CHECK(dense[1] == 0.0f);
+  CHECK(dense[2] == Approx(0.15 / 0.65));
+  CHECK(dense[3] == 0.0f);
+  CHECK(dense[4] == 0.0f);
+  CHECK_THROWS_AS(limit_weights(w, 0, 0.0f), gatcore::InvalidArgument);
+  CHECK_THROWS_AS(limit_weights(w, 4, 1.0f), gatcore::InvalidArgument);
+}
