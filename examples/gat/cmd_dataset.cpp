@@ -16,6 +16,7 @@
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/io/bvh.hpp"
+#include "progress.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;
@@ -24,43 +25,9 @@ namespace gat {
 
 namespace {
 
-void usage(std::FILE* f) {
-  std::fprintf(f,
-               "usage: gat dataset build -o DATASET.json [options] CHARACTER|DIR ... [--motion M.bvh ...]\n"
-               "  CHARACTER: .glb/.gltf/.fbx/.dae file, a directory of them, or procedural:humanoid:SEED /\n"
-               "             procedural:creature:SEED\n"
-               "  --random-poses N (32)  --pose-angle RAD (0.5)  --motion-stride K (4)  --seed S (0)\n"
-               "  --subsample M (1000)   --validation F (0.1)    --test F (0.1)\n"
-               "  --dm-iterations I (10) --dm-step S (0.5)       --skip-bad (skip unreadable characters)\n"
-               "  --distortion-scales K1,K2,... (1,4,16)  DenseGATs input columns: the skinning distortion of\n"
-               "             the mesh's detail coordinates at these smoothing scales (see\n"
-               "             include/gatcore/character/deform/detail_distortion.hpp); 'none' = the paper's features only\n"
-               "  --joint-limits FILE|humanoid  per-joint random-pose limits (JSON table, see\n"
-               "             include/gatcore/character/rig/joint_limits.hpp; 'humanoid' = the built-in table);\n"
-               "             recorded in the dataset; without it every joint axis gets +-pose-angle\n"
-               "  --test-characters A,B,...  --validation-characters C,...  an explicit split instead of the\n"
-               "             seeded one: each entry names one character by the end of its path (e.g.\n"
-               "             modular_men/Punk.glb); the rest train\n"
-               "usage: gat dataset export-character CHARACTER -o OUT.glb\n"
-               "  writes a dataset character (e.g. procedural:humanoid:5) as a skinned glTF file\n"
-               "usage: gat dataset export-motion procedural:swing[:FRAMES] -o OUT.bvh\n"
-               "  writes the built-in procedural swing motion (CMU joint names, 30 fps, default 24 frames)\n");
-}
-
 // `gat dataset export-motion procedural:swing[:N] -o OUT.bvh`: a motion for
 // the examples and tests that needs no downloaded data.
-int export_motion(int argc, char** argv) {
-  std::string entry, out;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-o" && i + 1 < argc) out = argv[++i];
-    else if (!a.empty() && a[0] != '-' && entry.empty()) entry = a;
-    else throw gatcore::InvalidArgument("export-motion: unknown or extra argument '" + a + "'");
-  }
-  if (entry.empty() || out.empty()) {
-    usage(stderr);
-    return 2;
-  }
+int export_motion(const std::string& entry, const std::string& out) {
   const std::string prefix = "procedural:swing";
   if (entry.compare(0, prefix.size(), prefix) != 0 || (entry.size() > prefix.size() && entry[prefix.size()] != ':'))
     throw gatcore::InvalidArgument("export-motion: unknown motion '" + entry + "' (expected procedural:swing[:FRAMES])");
@@ -82,18 +49,7 @@ int export_motion(int argc, char** argv) {
 
 // `gat dataset export-character ENTRY -o OUT.glb`: procedural characters as
 // files, so predict-weights / deform / other tools can take them.
-int export_character(int argc, char** argv) {
-  std::string entry, out;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-o" && i + 1 < argc) out = argv[++i];
-    else if (!a.empty() && a[0] != '-' && entry.empty()) entry = a;
-    else throw gatcore::InvalidArgument("export-character: unknown or extra argument '" + a + "'");
-  }
-  if (entry.empty() || out.empty()) {
-    usage(stderr);
-    return 2;
-  }
+int export_character(const std::string& entry, const std::string& out) {
   const std::string ext = std::filesystem::path(out).extension().string();
   if (ext != ".glb" && ext != ".gltf") throw gatcore::InvalidArgument(out + ": the output must be a .glb or .gltf file");
   const Character c = load_dataset_character(entry);
@@ -104,61 +60,20 @@ int export_character(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-
-int cmd_dataset(int argc, char** argv) {
-  if (argc < 2 || std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help") {
-    usage(argc < 2 ? stderr : stdout);
-    return argc < 2 ? 2 : 0;
-  }
-  if (std::string(argv[1]) == "export-character") return export_character(argc, argv);
-  if (std::string(argv[1]) == "export-motion") return export_motion(argc, argv);
-  if (std::string(argv[1]) != "build")
-    throw gatcore::InvalidArgument(std::string("unknown dataset action '") + argv[1] +
-                                   "' (expected build, export-character or export-motion)");
+struct BuildArgs {
   DatasetDescription s;
-  s.distortion_scales = {1, 4, 16};
-  std::string out;
+  std::string out, test_list, validation_list, joint_limits, distortion_scales = "1,4,16";
   std::vector<std::string> inputs, motions;
-  bool skip_bad = false;
-  std::string test_list, validation_list;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw gatcore::InvalidArgument(a + " expects a value");
-      return argv[++i];
-    };
-    auto number = [&](double lo, double hi) {
-      const std::string v = value();
-      char* end = nullptr;
-      const double x = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end || !(x >= lo && x <= hi))
-        throw gatcore::InvalidArgument(a + " expects a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-      return x;
-    };
-    if (a == "-o") out = value();
-    else if (a == "--motion") motions.push_back(value());
-    else if (a == "--random-poses") s.random_poses = static_cast<int>(number(0, 1e6));
-    else if (a == "--pose-angle") s.pose_angle = static_cast<float>(number(0, 3.2));
-    else if (a == "--motion-stride") s.motion_stride = static_cast<int>(number(1, 1e6));
-    else if (a == "--seed") s.seed = static_cast<std::uint32_t>(number(0, 4294967295.0));
-    else if (a == "--subsample") s.subsample = static_cast<std::int64_t>(number(0, 1e9));
-    else if (a == "--validation") s.validation = static_cast<float>(number(0, 0.9));
-    else if (a == "--test") s.test = static_cast<float>(number(0, 0.9));
-    else if (a == "--dm-iterations") s.delta_mush.iterations = static_cast<int>(number(0, 10000));
-    else if (a == "--dm-step") s.delta_mush.step = static_cast<float>(number(1e-6, 1));
-    else if (a == "--distortion-scales") s.distortion_scales = parse_distortion_scales(value(), a);
-    else if (a == "--skip-bad") skip_bad = true;
-    else if (a == "--joint-limits") s.joint_limits = load_joint_limits(value());
-    else if (a == "--test-characters") test_list = value();
-    else if (a == "--validation-characters") validation_list = value();
-    else if (!a.empty() && a[0] == '-') throw gatcore::InvalidArgument("unknown option '" + a + "'");
-    else inputs.push_back(a);
-  }
-  if (out.empty() || inputs.empty()) {
-    usage(stderr);
-    return 2;
-  }
+  bool skip_bad = false, quiet = false;
+};
+
+int build(BuildArgs& a) {
+  DatasetDescription& s = a.s;
+  s.distortion_scales = parse_distortion_scales(a.distortion_scales, "--distortion-scales");
+  if (!a.joint_limits.empty()) s.joint_limits = load_joint_limits(a.joint_limits);
+  const std::string out = a.out, test_list = a.test_list, validation_list = a.validation_list;
+  const std::vector<std::string>&inputs = a.inputs, &motions = a.motions;
+  const bool skip_bad = a.skip_bad;
   namespace fs = std::filesystem;
   std::vector<std::string> files;
   for (const auto& in : inputs) {
@@ -176,20 +91,25 @@ int cmd_dataset(int argc, char** argv) {
     }
   }
   std::vector<std::string> good;
+  gat::Progress progress("checking characters", std::int64_t(files.size()), "characters", a.quiet);
   for (const auto& f : files) {
+    progress.update(std::int64_t(&f - files.data()), f);
     try {
       const Character c = load_dataset_character(f);
-      std::printf("  %-60s %6lld vertices %3d joints\n", f.c_str(), static_cast<long long>(c.mesh.num_vertices()),
+      if (!a.quiet) progress.finish();
+      if (!a.quiet) std::printf("  %-60s %6lld vertices %3d joints\n", f.c_str(), static_cast<long long>(c.mesh.num_vertices()),
                   c.skeleton.num_joints());
       good.push_back(f);
     } catch (const gatcore::Error& e) {
       if (!skip_bad) throw;
+      progress.finish();
       std::fprintf(stderr, "  skipped: %s\n", e.what());
     }
   }
+  progress.finish();
   for (const auto& m : motions) {
     const Motion mo = load_bvh(m);
-    std::printf("  %-60s %6zu frames  %3d joints\n", m.c_str(), mo.clip.frames.size(), mo.skeleton.num_joints());
+    if (!a.quiet) std::printf("  %-60s %6zu frames  %3d joints\n", m.c_str(), mo.clip.frames.size(), mo.skeleton.num_joints());
   }
   DatasetDescription d = describe_dataset(good, motions, s);
   if (!test_list.empty() || !validation_list.empty()) {
@@ -232,6 +152,75 @@ int cmd_dataset(int argc, char** argv) {
               d.delta_mush.step,
               d.joint_limits ? ("joint limits '" + d.joint_limits->name + "'").c_str() : "+-pose-angle per joint axis");
   return 0;
+}
+
+}  // namespace
+
+Runner setup_dataset(CLI::App& gat) {
+  CLI::App& c = add_command(gat, "dataset",
+                            "build a dataset description (characters, motions, split, reference deformer); export "
+                            "procedural characters and motions");
+  c.require_subcommand(1);
+  auto b = std::make_shared<BuildArgs>();
+  b->s.distortion_scales = {1, 4, 16};
+  CLI::App& build_cmd = add_command(c, "build", "check that every character and motion loads, write DATASET.json");
+  auto& s = b->s;
+  add_out(build_cmd, b->out, "the dataset description to write (DATASET.json)")->required();
+  build_cmd.add_option("CHARACTER", b->inputs,
+                       ".glb/.gltf/.fbx/.dae file, a directory of them, or procedural:humanoid:SEED / "
+                       "procedural:creature:SEED")
+      ->required()->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  add_repeatable(build_cmd, "--motion", b->motions, "a BVH motion, retargeted onto every character");
+  build_cmd.add_option("--random-poses", s.random_poses, "random poses per character and epoch")
+      ->check(int_in(0, 1000000))->capture_default_str();
+  build_cmd.add_option("--pose-angle", s.pose_angle, "random joint angles within +-RAD per axis")
+      ->check(number_in(0, 3.2))->capture_default_str();
+  build_cmd.add_option("--motion-stride", s.motion_stride, "every K-th motion frame")
+      ->check(int_in(1, 1000000))->capture_default_str();
+  build_cmd.add_option("--seed", s.seed, "split, poses and windows")->check(int_in(0, 4294967295LL))->capture_default_str();
+  build_cmd.add_option("--subsample", s.subsample, "DenseGATs: consecutive vertices per sample (0: whole mesh)")
+      ->check(int_in(0, 1000000000))->capture_default_str();
+  build_cmd.add_option("--validation", s.validation,
+                       "fraction of characters that validate (at least one when the fraction is above 0 and there "
+                       "are 3 or more characters)")
+      ->check(number_in(0, 0.9))->capture_default_str();
+  build_cmd.add_option("--test", s.test, "fraction of characters held out for testing (as --validation)")
+      ->check(number_in(0, 0.9))->capture_default_str();
+  build_cmd.add_option("--dm-iterations", s.delta_mush.iterations, "the reference Delta Mush's smoothing iterations")
+      ->check(int_in(0, 10000))->capture_default_str();
+  build_cmd.add_option("--dm-step", s.delta_mush.step, "the reference Delta Mush's smoothing step")
+      ->check(number_in(1e-6, 1))->capture_default_str();
+  build_cmd.add_flag("--skip-bad", b->skip_bad, "skip unreadable characters (each named on stderr)");
+  build_cmd.add_option("--distortion-scales", b->distortion_scales,
+                       "K1,K2,... DenseGATs input columns: the skinning distortion of the mesh's detail coordinates "
+                       "at these smoothing scales (include/gatcore/character/deform/detail_distortion.hpp); 'none' = the "
+                       "paper's features only")
+      ->capture_default_str();
+  build_cmd.add_option("--joint-limits", b->joint_limits,
+                       "FILE|humanoid: per-joint random-pose limits (JSON table, see "
+                       "include/gatcore/character/rig/joint_limits.hpp; 'humanoid' = the built-in table); recorded in the "
+                       "dataset; without it every joint axis gets +-pose-angle");
+  build_cmd.add_option("--test-characters", b->test_list,
+                       "A,B,... an explicit split instead of the seeded one: each entry names one character by the "
+                       "end of its path (e.g. modular_men/Punk.glb); the rest train");
+  build_cmd.add_option("--validation-characters", b->validation_list, "C,D,... as --test-characters");
+  build_cmd.add_flag("-q,--quiet", b->quiet, "no progress line and no per-character lines: only the summary");
+
+  auto entry = std::make_shared<std::string>(), out = std::make_shared<std::string>();
+  CLI::App& xc = add_command(c, "export-character", "write a dataset character (e.g. procedural:humanoid:5) as a "
+                                                    "skinned glTF file");
+  xc.add_option("CHARACTER", *entry, "a dataset entry: a file or procedural:humanoid:SEED / procedural:creature:SEED")
+      ->required();
+  add_out(xc, *out, "the .glb / .gltf to write")->required();
+  CLI::App& xm = add_command(c, "export-motion", "write the built-in procedural swing motion (CMU joint names, 30 "
+                                                 "fps, default 24 frames) as BVH");
+  xm.add_option("MOTION", *entry, "procedural:swing[:FRAMES]")->required();
+  add_out(xm, *out, "the .bvh to write")->required();
+  return [b, entry, out, &build_cmd, &xc] {
+    if (build_cmd.parsed()) return build(*b);
+    if (xc.parsed()) return export_character(*entry, *out);
+    return export_motion(*entry, *out);
+  };
 }
 
 }  // namespace gat

@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "gatcore/character/io/gltf.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
+#include "progress.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore;
@@ -21,69 +22,31 @@ namespace gat {
 
 namespace {
 
-void usage(std::FILE* f) {
-  std::fprintf(f,
-               "usage: gat predict-weights MODEL CHARACTER.glb -o OUT.glb [--max-influences K] [--alias JOINT=BONE ...]\n"
-               "                           [--device cpu|vulkan|auto] [--threads T]\n"
-               "  Predicts skin weights for CHARACTER (.glb/.gltf) with a skin-weight checkpoint (neuroskinning,\n"
-               "  neuroskinning-nopool, pointnet, fc; trained with gat train --data) and writes the file again\n"
-               "  with the new weights, everything else kept. The model's bones are matched to the character's\n"
-               "  joints by normalised name (\"LeftArm\" = \"Arm.L\" = \"arm.l\"); joints without a match get no weight.\n"
-               "  --max-influences K  bones kept per vertex, renormalised (default 4, what engines expect; more\n"
-               "                      are written as JOINTS_1/WEIGHTS_1, ...)\n"
-               "  --alias JOINT=BONE  treat the character's joint JOINT as the model's bone BONE (repeatable)\n"
-               "  --device D          where the model runs (cpu default; see gat train --help)\n");
-}
+struct PredictArgs {
+  std::string model_path, in, out;
+  long k = 4;
+  std::vector<std::string> aliases;
+  CommonOptions common;
+};
 
-}  // namespace
-
-int cmd_predict_weights(int argc, char** argv) {
-  std::string model_path, in, out, device = "cpu";
-  long k = 4, threads = 0;
+int run(const PredictArgs& a) {
+  const std::string &model_path = a.model_path, &in = a.in, &out = a.out;
+  const long k = a.k;
   BoneAliases aliases;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw InvalidArgument(a + " expects a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") {
-      usage(stdout);
-      return 0;
-    } else if (a == "-o") {
-      out = value();
-    } else if (a == "--max-influences") {
-      k = parse_int(a, value(), 1, 64);
-    } else if (a == "--alias") {
-      add_alias(aliases, value());
-    } else if (a == "--device") {
-      device = value();
-    } else if (a == "--threads") {
-      threads = parse_int(a, value(), 1, 1024);
-    } else if (!a.empty() && a[0] != '-' && model_path.empty()) {
-      model_path = a;
-    } else if (!a.empty() && a[0] != '-' && in.empty()) {
-      in = a;
-    } else {
-      throw InvalidArgument("unknown or extra argument '" + a + "'");
-    }
-  }
-  if (model_path.empty() || in.empty() || out.empty()) {
-    usage(stderr);
-    return 2;
-  }
+  for (const auto& al : a.aliases) add_alias(aliases, al);
   GATCORE_CHECK(is_gltf_path(in), in, ": predict-weights reads glTF characters (.glb / .gltf)");
   GATCORE_CHECK(is_gltf_path(out), out, ": the output must be a .glb or .gltf file");
   const std::filesystem::path dir = std::filesystem::path(out).parent_path();
   GATCORE_CHECK(dir.empty() || std::filesystem::is_directory(dir), out, ": the directory ", dir.string(),
                 " does not exist");
-  if (threads > 0) omp_set_num_threads(int(threads));
-  const Device dev = device_from_flag(device, "predict-weights");
+  apply_threads(a.common);
+  const Device dev = device_from_flag(a.common.device, "predict-weights");
   models::LoadedModel lm = models::load_checkpoint(model_path);
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::weights);
   const Character ch = load_gltf(in);
   lm.model->to(dev);
   lm.model->fold_batch_norm();
+  Activity doing("predicting the skin weights of " + in);
   const WeightPrediction p = predict_skin_weights(*lm.model, lm.norm, bones, ch, int(k), aliases);
   save_gltf_with_weights(in, ch, p.weights, out, int(k));
 
@@ -104,6 +67,29 @@ int cmd_predict_weights(int argc, char** argv) {
   std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
               out.c_str());
   return 0;
+}
+
+}  // namespace
+
+Runner setup_predict_weights(CLI::App& gat) {
+  auto a = std::make_shared<PredictArgs>();
+  CLI::App& c = add_command(gat, "predict-weights", "skin weights for a character from a NeuroSkinning-family model");
+  set_details(c, "Predicts skin weights for CHARACTER (.glb/.gltf) with a skin-weight checkpoint (neuroskinning, "
+                "neuroskinning-nopool, pointnet, fc; trained with gat train --data) and writes the file again with "
+                "the new weights, everything else kept. The model's bones are matched to the character's joints by "
+                "normalised name (\"LeftArm\" = \"Arm.L\" = \"arm.l\"); joints without a match get no weight.");
+  c.add_option("MODEL", a->model_path, "a skin-weight checkpoint (.gcm)")->required();
+  c.add_option("CHARACTER", a->in, "the character (.glb / .gltf)")->required();
+  add_out(c, a->out, "the character with the predicted weights (.glb / .gltf)")->required();
+  c.add_option("--max-influences", a->k,
+               "bones kept per vertex, renormalised (4: what engines expect; more are written as "
+               "JOINTS_1/WEIGHTS_1, ...)")
+      ->check(int_in(1, 64))->capture_default_str();
+  add_repeatable(c, "--alias", a->aliases, "JOINT=BONE: treat the character's joint JOINT as the model's bone BONE");
+  add_device(c, a->common);
+  add_threads(c, a->common);
+  add_quiet(c, a->common);
+  return [a] { return run(*a); };
 }
 
 }  // namespace gat

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -24,6 +23,7 @@
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "progress.hpp"
 
 using namespace gatcore;
 using namespace gatcore::character;
@@ -31,26 +31,6 @@ using namespace gatcore::models;
 namespace fs = std::filesystem;
 
 namespace {
-
-int usage(int rc) {
-  std::fprintf(rc ? stderr : stdout,
-               "usage: gat eval --motion M.bvh [--motion ...] --data DATASET [--model [LABEL=]FILE ...]\n"
-               "                [--part test|validation|train] [--stride K] [--json OUT] [--markdown OUT]\n"
-               "                [--errormaps DIR] [--errormap-frames N] [--errormap-size PX]\n"
-               "                [--loss-curve LABEL=TRAIN_LOG ...] [--cm-per-unit X]\n"
-               "  Evaluates displacement models (LBS + predicted offsets) and the LBS and DQS baselines\n"
-               "  against the dataset's reference deformer (Delta Mush on LBS) on every K-th frame\n"
-               "  (default 1: all frames) of each motion retargeted onto each character of the part:\n"
-               "  per-vertex distance mean / max / min per character and motion, per character, overall.\n"
-               "  --cm-per-unit X  centimetres per world unit (default: 100 for glTF files, whose unit is the\n"
-               "                   metre; unknown for other sources unless given)\n"
-               "  --errormaps DIR  per-vertex error colour maps (PNG) of N frames (default 2) of the first\n"
-               "                   motion per character and method, one colour scale per frame: blue 0, red\n"
-               "                   the 99th percentile of LBS's error in that frame (in the JSON) and above\n"
-               "  --loss-curve LABEL=LOG  plots the train / validation loss per epoch of a `gat train` log\n"
-               "                   (its 'epoch N/M  train loss X  val loss Y' lines) to DIR/loss_LABEL.png\n");
-  return rc;
-}
 
 struct Acc {
   double sum = 0, max = 0, min = std::numeric_limits<double>::infinity();
@@ -116,63 +96,21 @@ std::vector<std::vector<float>> read_losses(const std::string& path) {
 
 }  // namespace
 
-int gat::eval_motion(int argc, char** argv) {
-  std::string data, part = "test", json_out, md_out, map_dir;
-  std::vector<std::string> motion_paths, loss_curves;
+int gat::eval_motion(const EvalMotionArgs& args) {
+  const std::string data = args.data, part = args.part, json_out = args.json, md_out = args.markdown,
+                    map_dir = args.errormaps;
+  const std::vector<std::string>& motion_paths = args.motions;
+  const std::vector<std::string>& loss_curves = args.loss_curves;
   std::vector<std::pair<std::string, std::string>> model_args;  // label, file
-  long stride = 1, map_frames = 2, map_size = 320;
-  double cm_per_unit = -1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-h" || a == "--help") return usage(0);
-    if (i + 1 >= argc) {
-      std::fprintf(stderr, "gat eval: unknown or incomplete option '%s'\n", a.c_str());
-      return usage(2);
-    }
-    const std::string v = argv[++i];
-    auto integer = [&](long lo, long hi) {
-      char* end = nullptr;
-      const long x = std::strtol(v.c_str(), &end, 10);
-      if (v.empty() || *end || x < lo || x > hi)
-        throw InvalidArgument(detail::cat("gat eval: ", a, " expects an integer in [", lo, ", ", hi, "], got '", v, "'"));
-      return x;
-    };
-    if (a == "--motion") motion_paths.push_back(v);
-    else if (a == "--data") data = v;
-    else if (a == "--part") part = v;
-    else if (a == "--model") {
-      const auto eq = v.find('=');
-      model_args.emplace_back(eq == std::string::npos ? std::string() : v.substr(0, eq),
-                              eq == std::string::npos ? v : v.substr(eq + 1));
-    } else if (a == "--stride") stride = integer(1, 1000000);
-    else if (a == "--json") json_out = v;
-    else if (a == "--markdown") md_out = v;
-    else if (a == "--errormaps") map_dir = v;
-    else if (a == "--errormap-frames") map_frames = integer(0, 1000);
-    else if (a == "--errormap-size") map_size = integer(32, 4096);
-    else if (a == "--loss-curve") loss_curves.push_back(v);
-    else if (a == "--cm-per-unit") {
-      char* end = nullptr;
-      cm_per_unit = std::strtod(v.c_str(), &end);
-      if (*end || !(cm_per_unit > 0) || !std::isfinite(cm_per_unit))
-        throw InvalidArgument("gat eval: --cm-per-unit expects a positive number, got '" + v + "'");
-    } else {
-      std::fprintf(stderr, "gat eval: unknown option '%s'\n", a.c_str());
-      return usage(2);
-    }
+  for (const std::string& v : args.models) {
+    const auto eq = v.find('=');
+    model_args.emplace_back(eq == std::string::npos ? std::string() : v.substr(0, eq),
+                            eq == std::string::npos ? v : v.substr(eq + 1));
   }
-  if (data.empty() || motion_paths.empty()) {
-    std::fprintf(stderr, "gat eval: --motion needs --data DATASET\n");
-    return usage(2);
-  }
-  if (part != "test" && part != "validation" && part != "train") {
-    std::fprintf(stderr, "gat eval: --part expects test, validation or train, got '%s'\n", part.c_str());
-    return 2;
-  }
-  if (!loss_curves.empty() && map_dir.empty()) {
-    std::fprintf(stderr, "gat eval: --loss-curve writes into the --errormaps DIR; give one\n");
-    return 2;
-  }
+  const long stride = args.stride, map_frames = args.errormap_frames, map_size = args.errormap_size;
+  const double cm_per_unit = args.cm_per_unit;
+  GATCORE_CHECK(!data.empty(), "--motion needs --data DATASET");
+  GATCORE_CHECK(loss_curves.empty() || !map_dir.empty(), "--loss-curve writes into the --errormaps DIR; give one");
   const auto t0 = std::chrono::steady_clock::now();
   const TrainingData td = load_training_data(data);
   const std::string bones = joined_bone_names(td.super);
@@ -184,14 +122,14 @@ int gat::eval_motion(int argc, char** argv) {
   for (auto& [label, file] : model_args) {
     M m{label, file, load_checkpoint(file)};
     const ModelConfig& cfg = m.l.model->config();
-    GATCORE_CHECK(cfg.task == Task::displacement, "gat eval: ", file, ": model '", cfg.name,
+    GATCORE_CHECK(cfg.task == Task::displacement, file, ": model '", cfg.name,
                   "' predicts skin weights; --motion evaluates displacement models");
-    GATCORE_CHECK(cfg.in_dim == td.feature_dim(Task::displacement), "gat eval: ", file, " takes ", cfg.in_dim,
+    GATCORE_CHECK(cfg.in_dim == td.feature_dim(Task::displacement), file, " takes ", cfg.in_dim,
                   " features; ", data, " has ", td.feature_dim(Task::displacement), " (distortion scales: ",
                   format_distortion_scales(td.description.distortion_scales), ")");
     const auto& md = m.l.file.metadata;
     if (md.count("skeleton") && md.at("skeleton") != bones)
-      throw InvalidArgument(detail::cat("gat eval: ", file, ": trained on a super skeleton (", md.at("skeleton"),
+      throw InvalidArgument(detail::cat(file, ": trained on a super skeleton (", md.at("skeleton"),
                                         ") that differs from ", data, "'s (", bones, ")"));
     if (m.label.empty()) m.label = cfg.name;
     m.l.model->fold_batch_norm();
@@ -201,7 +139,7 @@ int gat::eval_motion(int argc, char** argv) {
   for (const auto& p : motion_paths) motions.push_back(load_bvh(p));
   const auto dpart = part == "test" ? DatasetPart::test : part == "validation" ? DatasetPart::validation : DatasetPart::train;
   const auto& chars = td.part(dpart);
-  GATCORE_CHECK(!chars.empty(), "gat eval: ", data, " has no ", part, " characters");
+  GATCORE_CHECK(!chars.empty(), data, " has no ", part, " characters");
 
   std::vector<std::string> methods = {"LBS", "DQS"};
   for (const auto& m : models_) methods.push_back(m.label);
@@ -218,6 +156,11 @@ int gat::eval_motion(int argc, char** argv) {
     std::vector<Acc> acc;
   };
   std::vector<Row> table, per_char;
+  std::int64_t total_frames = 0, done_frames = 0;
+  for (const Motion& mo : motions)
+    total_frames += std::int64_t((mo.clip.frames.size() + std::size_t(stride) - 1) / std::size_t(stride));
+  gat::Progress progress("evaluating " + part + " characters", total_frames * std::int64_t(chars.size()), "frames",
+                         args.quiet);
   for (std::int32_t c : chars) {
     const PreparedCharacter& pc = td.characters[std::size_t(c)];
     const std::string& entry = td.description.characters[std::size_t(c)];
@@ -239,6 +182,7 @@ int gat::eval_motion(int argc, char** argv) {
           map_at.push_back(frames[std::size_t((2 * k + 1) * frames.size() / std::size_t(2 * map_frames))]);
       const auto tc = std::chrono::steady_clock::now();
       for (std::size_t f : frames) {
+        progress.update(done_frames++, character_label(entry));
         const Pose& pose = clip.frames[f];
         DenseGatsSample raw;
         const Sample s = densegats_full_sample(td, c, pose, &raw);
@@ -304,12 +248,15 @@ int gat::eval_motion(int argc, char** argv) {
           }
         }
       }
-      std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%.1f s):", row.character.c_str(),
-                  stem(row.motion).c_str(), static_cast<long long>(row.frames), static_cast<long long>(n),
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
-      for (std::size_t k = 0; k < K; ++k) std::printf("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
-      std::printf("\n");
-      std::fflush(stdout);
+      if (!args.quiet) {
+        progress.finish();
+        std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%.1f s):", row.character.c_str(),
+                    stem(row.motion).c_str(), static_cast<long long>(row.frames), static_cast<long long>(n),
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
+        for (std::size_t k = 0; k < K; ++k) std::printf("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
+        std::printf("\n");
+        std::fflush(stdout);
+      }
       for (std::size_t k = 0; k < K; ++k) chrow.acc[k].add(row.acc[k]);
       chrow.frames += row.frames;
       table.push_back(row);
@@ -322,9 +269,10 @@ int gat::eval_motion(int argc, char** argv) {
     }
     per_char.push_back(chrow);
   }
+  progress.finish();
   for (const auto& lc : loss_curves) {
     const auto eq = lc.find('=');
-    GATCORE_CHECK(eq != std::string::npos && eq > 0, "gat eval: --loss-curve expects LABEL=LOG, got '", lc, "'");
+    GATCORE_CHECK(eq != std::string::npos && eq > 0, "--loss-curve expects LABEL=LOG, got '", lc, "'");
     const auto series = read_losses(lc.substr(eq + 1));
     const std::string png = (fs::path(map_dir) / ("loss_" + lc.substr(0, eq) + ".png")).string();
     write_png(png, plot_curves(series, 480, 300, true));
