@@ -111,20 +111,16 @@ int run(const DeformArgs& a) {
   progress.finish();
   const double n = double(last - first);
   // Both outputs are complete in memory before either file is written.
-  bool pc2_written = false;
+  std::vector<std::string> pc2_paths;
+  std::vector<ObjectPointCache> caches;
   if (!pc2.empty()) {
-    PointCache pc;
-    pc.num_points = static_cast<std::int32_t>(ch.num_file_vertices());
-    pc.start_frame = static_cast<float>(first);
-    pc.sample_rate = 1.0f;
-    for (const auto& p : baked.positions) pc.samples.push_back(file_vertex_positions(ch, p));
-    write_point_cache(pc2, pc);
-    pc2_written = true;
+    caches = object_point_caches(ch, baked, a.up == "z" ? UpAxis::z : UpAxis::y, static_cast<float>(a.start_frame));
+    pc2_paths = write_object_point_caches(pc2, caches);
   }
   try {
     if (!out.empty()) save_gltf_morph_animation(in, ch, baked, out);
   } catch (...) {
-    if (pc2_written) std::remove(pc2.c_str());  // all outputs or none
+    for (const auto& p : pc2_paths) std::remove(p.c_str());  // all outputs or none
     throw;
   }
   std::printf("%ld frames in %.2f s: per frame features %.1f ms, inference %.1f ms, total %.1f ms (%.1f fps); "
@@ -132,7 +128,9 @@ int run(const DeformArgs& a) {
               last - first, std::chrono::duration<double>(std::chrono::steady_clock::now() - t_all).count(), sum_f / n,
               sum_i / n, sum_t / n, 1e3 * n / std::max(sum_t, 1e-9), sum_corr / n, max_corr);
   if (!out.empty()) std::printf("  morph targets + animation '%s' -> %s\n", baked.name.c_str(), out.c_str());
-  if (!pc2.empty()) std::printf("  point cache (%lld points) -> %s\n", static_cast<long long>(ch.num_file_vertices()), pc2.c_str());
+  for (std::size_t i = 0; i < pc2_paths.size(); ++i)
+    std::printf("  point cache of object '%s' (%d points, %s up, from frame %ld) -> %s\n", caches[i].object.c_str(),
+                caches[i].cache.num_points, a.up.c_str(), a.start_frame, pc2_paths[i].c_str());
   return 0;
 }
 
