@@ -20,7 +20,7 @@ packages=(
 # machine; GATCORE_NO_BLENDER=1 leaves it out (the test then reports itself
 # skipped).
 if [[ "${GATCORE_NO_BLENDER:-0}" != 1 ]]; then
-  packages+=(blender)
+  packages+=(blender python3-numpy)  # its glTF importer needs numpy
 fi
 
 missing=()

@@ -10,8 +10,10 @@ Checks, against gatcore's own numbers read straight from the files:
   2. deform: one shape key per frame, the 'deform' action, and each shape
      key's positions equal the point cache's sample of that frame (written
      with --up z, Blender's frame);
-  3. the Mesh Cache modifier (PC2, default axes) on the imported object makes
-     Blender's evaluated mesh at scene frame FIRST_FRAME + k equal sample k.
+  3. the Mesh Cache modifier (PC2, default axes, Frame Start = FIRST_FRAME as
+     the README says: Blender 3.4 ignores the .pc2 header's start frame) on
+     the imported object makes Blender's evaluated mesh at scene frame
+     FIRST_FRAME + k equal sample k.
 Prints 'blender-ok' at the end; any failure raises (exit code 1)."""
 import json
 import struct
@@ -20,7 +22,7 @@ import sys
 import numpy as np
 
 # Debian 12's Blender 3.4 glTF importer uses np.bool, gone in its numpy 1.24.
-if not hasattr(np, "bool"):
+if "bool" not in np.__dict__:
     np.bool = bool
 
 import bpy  # noqa: E402
@@ -123,6 +125,7 @@ for kb in keys:
 mod = obj.modifiers.new("gat", "MESH_CACHE")
 mod.cache_format = "PC2"
 mod.filepath = cache_pc2
+mod.frame_start = first_frame  # the README's step: Blender reads samples from this scene frame on
 scene = bpy.context.scene
 worst = 0.0
 for f in range(cache.shape[0]):
