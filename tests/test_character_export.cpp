@@ -544,3 +544,77 @@ TEST_CASE("predicted weights for a real multi-primitive character re-import thro
   CHECK(b.animations.size() == a.animations.size());
   CHECK(b.meshes.size() == a.meshes.size());
 }
+
+TEST_CASE("point caches: one per object in the object's vertex order, Blender's Z-up and start frame on request",
+          "[character][export][pc2]") {
+  // Two objects of one mesh: the character's own node and an unnamed copy
+  // (Blender calls it Node_<index>), as a multi-mesh character has.
+  tinygltf::Model m = read_gltf(humanoid_glb(5));
+  REQUIRE(m.nodes[0].mesh == 0);
+  tinygltf::Node copy = m.nodes[0];
+  copy.name.clear();
+  copy.children.clear();
+  m.nodes.push_back(copy);
+  const int copy_index = int(m.nodes.size()) - 1;
+  m.scenes[0].nodes.push_back(copy_index);
+  const std::string src = tmp("humanoid_two_objects.glb");
+  tinygltf::TinyGLTF g;
+  REQUIRE(g.WriteGltfSceneToFile(&m, src, true, true, false, true));
+  const Character ch = load_gltf(src);
+  REQUIRE(ch.primitives.size() == 2);
+
+  BakedFrames frames;
+  frames.positions = {ch.mesh.positions, ch.mesh.positions};
+  for (std::size_t i = 0; i < frames.positions[1].size(); ++i) frames.positions[1][i] += 0.01f * float(i % 5);
+  const auto caches = object_point_caches(ch, frames, UpAxis::z, 1.0f);
+  REQUIRE(caches.size() == 2);
+  CHECK(caches[0].object == m.nodes[0].name);
+  CHECK(caches[1].object == "Node_" + std::to_string(copy_index));
+  for (std::size_t o = 0; o < 2; ++o) {
+    const SourcePrimitive& sp = ch.primitives[o];
+    const PointCache& pc = caches[o].cache;
+    CHECK(pc.num_points == sp.num_vertices);
+    CHECK(pc.start_frame == 1.0f);
+    REQUIRE(pc.samples.size() == 2);
+    for (std::size_t f = 0; f < 2; ++f)
+      for (std::int64_t i = 0; i < sp.num_vertices; ++i) {
+        const float* w = &frames.positions[f][3 * std::size_t(ch.welded_from_file[std::size_t(sp.first_vertex + i)])];
+        const float* p = &pc.samples[f][3 * std::size_t(i)];
+        CHECK(p[0] == w[0]);  // Blender's Z-up: (x, y, z) -> (x, -z, y)
+        CHECK(p[1] == -w[2]);
+        CHECK(p[2] == w[1]);
+      }
+  }
+  // Y-up keeps the file's frame.
+  const auto y_up = object_point_caches(ch, frames, UpAxis::y, 0.0f);
+  const auto file = file_vertex_positions(ch, frames.positions[1]);
+  const auto& second = y_up[1].cache.samples[1];
+  REQUIRE(second.size() == 3 * std::size_t(ch.primitives[1].num_vertices));
+  CHECK(std::equal(second.begin(), second.end(), file.begin() + 3 * ch.primitives[1].first_vertex));
+
+  // Files: named after the objects, all written and read back, or none.
+  const std::string base = tmp("walk.pc2");
+  const auto paths = object_point_cache_paths(base, caches);
+  REQUIRE(paths.size() == 2);
+  CHECK(paths[0] == tmp("walk_procedural_humanoid_5.pc2"));
+  CHECK(paths[1] == tmp("walk_Node_" + std::to_string(copy_index) + ".pc2"));
+  for (const auto& p : paths) std::filesystem::remove(p);
+  CHECK(write_object_point_caches(base, caches) == paths);
+  for (std::size_t o = 0; o < 2; ++o) {
+    const PointCache back = read_point_cache(paths[o]);
+    CHECK(back.num_points == caches[o].cache.num_points);
+    CHECK(back.start_frame == 1.0f);
+    CHECK(back.samples == caches[o].cache.samples);
+  }
+  CHECK(!std::filesystem::exists(base));
+  // One object: the path as given.
+  const Character one = load_gltf(humanoid_glb(5));
+  CHECK(object_point_cache_paths(base, object_point_caches(one, {"deform", 30.0f, {one.mesh.positions}}, UpAxis::y, 1))
+        == std::vector<std::string>{base});
+  // A failed write leaves none of them.
+  auto bad = caches;
+  bad[1].cache.samples[0][0] = std::nanf("");
+  const std::string base2 = tmp("walk_bad.pc2");
+  CHECK_THROWS_WITH(write_object_point_caches(base2, bad), Catch::Matchers::Contains("non-finite"));
+  for (const auto& p : object_point_cache_paths(base2, bad)) CHECK(!std::filesystem::exists(p));
+}

@@ -1,6 +1,5 @@
 // Loss curves: plot_series with axes, ticks and legend, the history files
-// gat train writes, and the PNG decoded by zlib (an independent inflater)
-// when the build found it.
+// gat train writes, and the PNG decoded by libpng (an independent decoder).
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -10,13 +9,10 @@
 #include <iterator>
 #include <set>
 
-#ifdef GATCORE_TEST_ZLIB
-#include <zlib.h>
-#endif
-
 #include "gatcore/character/viz/loss_curve.hpp"
 #include "gatcore/character/viz/plot.hpp"
 #include "gatcore/error.hpp"
+#include "png_read.hpp"
 
 using namespace gatcore::character;
 using Catch::Matchers::Contains;
@@ -29,61 +25,7 @@ std::string tmp(const std::string& name) {
   return (dir / name).string();
 }
 
-std::uint32_t be32(const std::string& s, std::size_t at) {
-  return (std::uint32_t(std::uint8_t(s[at])) << 24) | (std::uint32_t(std::uint8_t(s[at + 1])) << 16) |
-         (std::uint32_t(std::uint8_t(s[at + 2])) << 8) | std::uint32_t(std::uint8_t(s[at + 3]));
-}
-
-// Decodes an 8-bit RGB, filter-0 PNG (what write_png produces); the inflate
-// step is zlib's when available.
-Image decode_png(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  const std::string b((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  REQUIRE(b.size() > 33);
-  REQUIRE(b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0);
-  Image img;
-  std::string idat;
-  for (std::size_t at = 8; at + 12 <= b.size();) {
-    const std::uint32_t len = be32(b, at);
-    const std::string type = b.substr(at + 4, 4);
-    REQUIRE(at + 12 + len <= b.size());
-    if (type == "IHDR") {
-      img.width = int(be32(b, at + 8));
-      img.height = int(be32(b, at + 12));
-      CHECK(b[at + 16] == 8);  // bit depth
-      CHECK(b[at + 17] == 2);  // RGB
-    } else if (type == "IDAT") {
-      idat += b.substr(at + 8, len);
-    }
-    at += 12 + len;
-  }
-  const std::size_t raw_size = std::size_t(img.height) * (3 * std::size_t(img.width) + 1);
-  std::string raw(raw_size, '\0');
-#ifdef GATCORE_TEST_ZLIB
-  uLongf got = uLongf(raw_size);
-  REQUIRE(uncompress(reinterpret_cast<Bytef*>(raw.data()), &got, reinterpret_cast<const Bytef*>(idat.data()),
-                     uLong(idat.size())) == Z_OK);
-  REQUIRE(got == raw_size);
-#else
-  WARN("SKIPPED: zlib not found at build time; inflating stored blocks by hand");
-  std::size_t at = 2, out = 0;
-  for (bool last = false; !last;) {
-    last = idat[at] & 1;
-    const std::size_t len = std::uint8_t(idat[at + 1]) | (std::size_t(std::uint8_t(idat[at + 2])) << 8);
-    REQUIRE(out + len <= raw_size);
-    std::memcpy(raw.data() + out, idat.data() + at + 5, len);
-    out += len, at += 5 + len;
-  }
-  REQUIRE(out == raw_size);
-#endif
-  img.rgb.resize(std::size_t(img.width) * img.height * 3);
-  for (int y = 0; y < img.height; ++y) {
-    const std::size_t row = std::size_t(y) * (3 * std::size_t(img.width) + 1);
-    REQUIRE(raw[row] == 0);
-    std::memcpy(img.rgb.data() + std::size_t(y) * 3 * img.width, raw.data() + row + 1, 3 * std::size_t(img.width));
-  }
-  return img;
-}
+Image decode_png(const std::string& path) { return gatcore::test::read_png(path); }
 
 int count_colour(const Image& img, std::array<std::uint8_t, 3> c, int x0 = 0, int x1 = -1) {
   int n = 0;

@@ -9,50 +9,13 @@
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
+#include "png_read.hpp"
 
 using namespace gatcore::character;
 
 namespace {
 
-// Reads back a PNG written by write_png (stored deflate blocks) into RGB.
-Image read_stored_png(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  const std::string s((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  REQUIRE(s.size() > 8);
-  REQUIRE(s.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0);
-  auto u32 = [&](std::size_t at) {
-    return (std::uint32_t(std::uint8_t(s[at])) << 24) | (std::uint32_t(std::uint8_t(s[at + 1])) << 16) |
-           (std::uint32_t(std::uint8_t(s[at + 2])) << 8) | std::uint32_t(std::uint8_t(s[at + 3]));
-  };
-  Image img;
-  std::string z;
-  for (std::size_t at = 8; at + 8 <= s.size();) {
-    const std::uint32_t len = u32(at);
-    const std::string type = s.substr(at + 4, 4);
-    if (type == "IHDR") {
-      img.width = static_cast<int>(u32(at + 8));
-      img.height = static_cast<int>(u32(at + 12));
-      CHECK(std::uint8_t(s[at + 16]) == 8);
-      CHECK(std::uint8_t(s[at + 17]) == 2);
-    }
-    if (type == "IDAT") z += s.substr(at + 8, len);
-    at += 12 + len;
-  }
-  std::string raw;
-  for (std::size_t p = 2;;) {
-    const bool final = z[p] & 1;
-    const std::size_t len = std::uint8_t(z[p + 1]) | (std::size_t(std::uint8_t(z[p + 2])) << 8);
-    raw += z.substr(p + 5, len);
-    p += 5 + len;
-    if (final) break;
-  }
-  for (int y = 0; y < img.height; ++y) {
-    const std::size_t row = static_cast<std::size_t>(y) * (3 * img.width + 1);
-    CHECK(raw[row] == 0);
-    img.rgb.insert(img.rgb.end(), raw.begin() + row + 1, raw.begin() + row + 1 + 3 * img.width);
-  }
-  return img;
-}
+using gatcore::test::read_png;
 
 }  // namespace
 
@@ -93,7 +56,7 @@ TEST_CASE("PNG files round-trip; pictures of a deformed tube and a loss curve", 
   img.height = 250;  // > 65535 bytes of scanlines: several deflate blocks
   for (int i = 0; i < img.width * img.height * 3; ++i) img.rgb.push_back(static_cast<std::uint8_t>(i * 7));
   write_png((dir / "pattern.png").string(), img);
-  const Image back = read_stored_png((dir / "pattern.png").string());
+  const Image back = read_png((dir / "pattern.png").string());
   CHECK(back.width == 300);
   CHECK(back.height == 250);
   CHECK(back.rgb == img.rgb);
@@ -110,7 +73,7 @@ TEST_CASE("PNG files round-trip; pictures of a deformed tube and a loss curve", 
                        std::pow(lbs[3 * v + 2] - dqs[3 * v + 2], 2.0f));
   const Image map = render_error_map(lbs, ch.mesh.triangles, err);
   write_png((dir / "tube_lbs_vs_dqs.png").string(), map);
-  CHECK(read_stored_png((dir / "tube_lbs_vs_dqs.png").string()).rgb == map.rgb);
+  CHECK(read_png((dir / "tube_lbs_vs_dqs.png").string()).rgb == map.rgb);
   int coloured = 0;
   for (std::size_t i = 0; i < map.rgb.size(); i += 3) coloured += !(map.rgb[i] == 255 && map.rgb[i + 1] == 255 && map.rgb[i + 2] == 255);
   CHECK(coloured > 5000);

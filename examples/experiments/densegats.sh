@@ -142,10 +142,6 @@ t0=$(date +%s)
 run "$gat" eval "${eval_args[@]}" | tee "$out/eval.log"
 eval_wall=$(( $(date +%s) - t0 ))
 
-# The PNG writer stores raw deflate blocks; recompress them (zlib) when a
-# Python is there, so the pictures stay small enough to commit.
-if command -v python3 > /dev/null; then python3 "$here/png_recompress.py" "$out"/img/*.png; fi
-
 # 4. The report.
 {
   echo "# DenseGATs experiment ($budget budget, seed $seed)"

@@ -11,12 +11,13 @@
 #include "commands.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/data/file_targets.hpp"
-#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
-#include "gatcore/character/eval/weight_eval.hpp"
-#include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/io/gltf.hpp"
 #include "gatcore/character/rig/motion.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/eval/weight_eval.hpp"
+#include "gatcore/character/io/bvh.hpp"
+#include "progress.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;
@@ -25,54 +26,9 @@ namespace gat {
 
 namespace {
 
-void usage(std::FILE* f) {
-  std::fprintf(f,
-               "usage: gat dataset build -o DATASET.json [options] CHARACTER|DIR ... [--motion M.bvh ...]\n"
-               "  CHARACTER: .glb/.gltf/.fbx/.dae file, a directory of them, or procedural:humanoid:SEED /\n"
-               "             procedural:creature:SEED\n"
-               "  --random-poses N (32)  --pose-angle RAD (0.5)  --motion-stride K (4)  --seed S (0)\n"
-               "  --subsample M (1000)   --validation F (0.1)    --test F (0.1)\n"
-               "  --dm-iterations I (10) --dm-step S (0.5)       --skip-bad (skip unreadable characters)\n"
-               "  --distortion-scales K1,K2,... (1,4,16)  DenseGATs input columns: the skinning distortion of\n"
-               "             the mesh's detail coordinates at these smoothing scales (see\n"
-               "             include/gatcore/character/deform/detail_distortion.hpp); 'none' = the paper's features only\n"
-               "  --joint-limits FILE|humanoid  per-joint random-pose limits (JSON table, see\n"
-               "             include/gatcore/character/rig/joint_limits.hpp; 'humanoid' = the built-in table);\n"
-               "             recorded in the dataset; without it every joint axis gets +-pose-angle\n"
-               "  --reference delta_mush|arap  the built-in reference deformer the targets come from (default\n"
-               "             delta_mush); arap: as-rigid-as-possible on LBS (include/gatcore/character/deform/arap.hpp)\n"
-               "             with --arap-iterations I (10) and --arap-handle-weight W (0.95)\n"
-               "  --target CHARACTER TARGET MOTION  the character's own per-frame targets instead: TARGET a .pc2\n"
-               "             point cache (or comma-separated .pc2, one per mesh, in the file's order) or a glTF\n"
-               "             with a morph-target animation (what gat deform writes); MOTION the BVH that drove it,\n"
-               "             or clip:NAME (the character file's own animation). Target frame k is motion frame\n"
-               "             FIRST + k * (the .pc2 sample rate); FIRST: the .pc2 start frame, 0 for a glTF, or\n"
-               "             --target-first-frame F after the --target. --target-animation NAME: the glTF's\n"
-               "             morph animation (default 'deform'). Vertex and frame counts are checked; the character\n"
-               "             trains and evaluates on its target frames only (every --motion-stride-th per epoch)\n"
-               "  --test-characters A,B,...  --validation-characters C,...  an explicit split instead of the\n"
-               "             seeded one: each entry names one character by the end of its path (e.g.\n"
-               "             modular_men/Punk.glb); the rest train\n"
-               "usage: gat dataset export-character CHARACTER -o OUT.glb\n"
-               "  writes a dataset character (e.g. procedural:humanoid:5) as a skinned glTF file\n"
-               "usage: gat dataset export-motion procedural:swing[:FRAMES] -o OUT.bvh\n"
-               "  writes the built-in procedural swing motion (CMU joint names, 30 fps, default 24 frames)\n");
-}
-
 // `gat dataset export-motion procedural:swing[:N] -o OUT.bvh`: a motion for
 // the examples and tests that needs no downloaded data.
-int export_motion(int argc, char** argv) {
-  std::string entry, out;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-o" && i + 1 < argc) out = argv[++i];
-    else if (!a.empty() && a[0] != '-' && entry.empty()) entry = a;
-    else throw gatcore::InvalidArgument("export-motion: unknown or extra argument '" + a + "'");
-  }
-  if (entry.empty() || out.empty()) {
-    usage(stderr);
-    return 2;
-  }
+int export_motion(const std::string& entry, const std::string& out) {
   const std::string prefix = "procedural:swing";
   if (entry.compare(0, prefix.size(), prefix) != 0 || (entry.size() > prefix.size() && entry[prefix.size()] != ':'))
     throw gatcore::InvalidArgument("export-motion: unknown motion '" + entry + "' (expected procedural:swing[:FRAMES])");
@@ -94,18 +50,7 @@ int export_motion(int argc, char** argv) {
 
 // `gat dataset export-character ENTRY -o OUT.glb`: procedural characters as
 // files, so predict-weights / deform / other tools can take them.
-int export_character(int argc, char** argv) {
-  std::string entry, out;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-o" && i + 1 < argc) out = argv[++i];
-    else if (!a.empty() && a[0] != '-' && entry.empty()) entry = a;
-    else throw gatcore::InvalidArgument("export-character: unknown or extra argument '" + a + "'");
-  }
-  if (entry.empty() || out.empty()) {
-    usage(stderr);
-    return 2;
-  }
+int export_character(const std::string& entry, const std::string& out) {
   const std::string ext = std::filesystem::path(out).extension().string();
   if (ext != ".glb" && ext != ".gltf") throw gatcore::InvalidArgument(out + ": the output must be a .glb or .gltf file");
   const Character c = load_dataset_character(entry);
@@ -116,86 +61,58 @@ int export_character(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-
-int cmd_dataset(int argc, char** argv) {
-  if (argc < 2 || std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help") {
-    usage(argc < 2 ? stderr : stdout);
-    return argc < 2 ? 2 : 0;
-  }
-  if (std::string(argv[1]) == "export-character") return export_character(argc, argv);
-  if (std::string(argv[1]) == "export-motion") return export_motion(argc, argv);
-  if (std::string(argv[1]) != "build")
-    throw gatcore::InvalidArgument(std::string("unknown dataset action '") + argv[1] +
-                                   "' (expected build, export-character or export-motion)");
+struct BuildArgs {
   DatasetDescription s;
-  s.distortion_scales = {1, 4, 16};
-  std::string out;
+  std::string out, test_list, validation_list, joint_limits, distortion_scales = "1,4,16", reference = "delta_mush";
   std::vector<std::string> inputs, motions;
-  bool skip_bad = false;
-  std::string test_list, validation_list;
+  bool skip_bad = false, quiet = false;
+  // --target CHARACTER TARGET MOTION (3 values per occurrence), and the
+  // --target-first-frame / --target-animation that follow one (parse order).
+  std::vector<std::string> target_values, target_animations;
+  std::vector<double> target_first_frames;
   struct TargetArg {
     std::string character;
     FileTargetSource src;
   };
   std::vector<TargetArg> targets;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw gatcore::InvalidArgument(a + " expects a value");
-      return argv[++i];
-    };
-    auto number = [&](double lo, double hi) {
-      const std::string v = value();
-      char* end = nullptr;
-      const double x = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end || !(x >= lo && x <= hi))
-        throw gatcore::InvalidArgument(a + " expects a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-      return x;
-    };
-    if (a == "-o") out = value();
-    else if (a == "--motion") motions.push_back(value());
-    else if (a == "--random-poses") s.random_poses = static_cast<int>(number(0, 1e6));
-    else if (a == "--pose-angle") s.pose_angle = static_cast<float>(number(0, 3.2));
-    else if (a == "--motion-stride") s.motion_stride = static_cast<int>(number(1, 1e6));
-    else if (a == "--seed") s.seed = static_cast<std::uint32_t>(number(0, 4294967295.0));
-    else if (a == "--subsample") s.subsample = static_cast<std::int64_t>(number(0, 1e9));
-    else if (a == "--validation") s.validation = static_cast<float>(number(0, 0.9));
-    else if (a == "--test") s.test = static_cast<float>(number(0, 0.9));
-    else if (a == "--dm-iterations") s.delta_mush.iterations = static_cast<int>(number(0, 10000));
-    else if (a == "--dm-step") s.delta_mush.step = static_cast<float>(number(1e-6, 1));
-    else if (a == "--distortion-scales") s.distortion_scales = parse_distortion_scales(value(), a);
-    else if (a == "--skip-bad") skip_bad = true;
-    else if (a == "--joint-limits") s.joint_limits = load_joint_limits(value());
-    else if (a == "--reference") {
-      s.reference = parse_reference_kind(value(), "--reference");
-      if (s.reference == ReferenceKind::files)
-        throw gatcore::InvalidArgument("--reference: file targets are given with --target CHARACTER TARGET MOTION");
-    } else if (a == "--arap-iterations") s.arap.iterations = static_cast<int>(number(1, 10000));
-    else if (a == "--arap-handle-weight") s.arap.handle_weight = static_cast<float>(number(1e-6, 1));
-    else if (a == "--target") {
-      TargetArg t;
-      t.character = value();
-      t.src.file = value();
-      t.src.motion = value();
-      inputs.push_back(t.character);
-      targets.push_back(std::move(t));
-    } else if (a == "--target-first-frame") {
-      if (targets.empty()) throw gatcore::InvalidArgument("--target-first-frame follows a --target");
-      targets.back().src.first_frame = number(-1e9, 1e9);
-    } else if (a == "--target-animation") {
-      if (targets.empty()) throw gatcore::InvalidArgument("--target-animation follows a --target");
-      targets.back().src.animation = value();
+};
+
+// The --target triples with the --target-first-frame / --target-animation
+// given after each (CLI11 keeps each option's values apart; the parse order
+// says which --target they follow).
+void collect_targets(CLI::App& cmd, BuildArgs& b) {
+  std::size_t first = 0, anim = 0;
+  for (const CLI::Option* o : cmd.parse_order()) {
+    const std::string name = o->get_name();
+    if (name == "--target") {
+      const std::size_t t = b.targets.size();
+      BuildArgs::TargetArg ta;
+      ta.character = b.target_values.at(3 * t);
+      ta.src.file = b.target_values.at(3 * t + 1);
+      ta.src.motion = b.target_values.at(3 * t + 2);
+      b.targets.push_back(std::move(ta));
+    } else if (name == "--target-first-frame") {
+      if (b.targets.empty()) throw gatcore::InvalidArgument("--target-first-frame follows a --target");
+      b.targets.back().src.first_frame = b.target_first_frames.at(first++);
+    } else if (name == "--target-animation") {
+      if (b.targets.empty()) throw gatcore::InvalidArgument("--target-animation follows a --target");
+      b.targets.back().src.animation = b.target_animations.at(anim++);
     }
-    else if (a == "--test-characters") test_list = value();
-    else if (a == "--validation-characters") validation_list = value();
-    else if (!a.empty() && a[0] == '-') throw gatcore::InvalidArgument("unknown option '" + a + "'");
-    else inputs.push_back(a);
   }
-  if (out.empty() || inputs.empty()) {
-    usage(stderr);
-    return 2;
-  }
+}
+
+int build(BuildArgs& a) {
+  DatasetDescription& s = a.s;
+  s.distortion_scales = parse_distortion_scales(a.distortion_scales, "--distortion-scales");
+  if (!a.joint_limits.empty()) s.joint_limits = load_joint_limits(a.joint_limits);
+  s.reference = parse_reference_kind(a.reference, "--reference");
+  if (s.reference == ReferenceKind::files)
+    throw gatcore::InvalidArgument("--reference: file targets are given with --target CHARACTER TARGET MOTION");
+  const std::string out = a.out, test_list = a.test_list, validation_list = a.validation_list;
+  std::vector<std::string> inputs = a.inputs;
+  for (const auto& t : a.targets) inputs.push_back(t.character);
+  const std::vector<std::string>& motions = a.motions;
+  const bool skip_bad = a.skip_bad;
   namespace fs = std::filesystem;
   std::vector<std::string> files;
   for (const auto& in : inputs) {
@@ -214,28 +131,34 @@ int cmd_dataset(int argc, char** argv) {
     }
   }
   std::vector<std::string> good;
+  gat::Progress progress("checking characters", std::int64_t(files.size()), "characters", a.quiet);
   for (const auto& f : files) {
+    progress.update(std::int64_t(&f - files.data()), f);
     try {
       const Character c = load_dataset_character(f);
-      std::printf("  %-60s %6lld vertices %3d joints\n", f.c_str(), static_cast<long long>(c.mesh.num_vertices()),
+      if (!a.quiet) progress.finish();
+      if (!a.quiet) std::printf("  %-60s %6lld vertices %3d joints\n", f.c_str(), static_cast<long long>(c.mesh.num_vertices()),
                   c.skeleton.num_joints());
       good.push_back(f);
     } catch (const gatcore::Error& e) {
       if (!skip_bad) throw;
+      progress.finish();
       std::fprintf(stderr, "  skipped: %s\n", e.what());
     }
   }
+  progress.finish();
   for (const auto& m : motions) {
     const Motion mo = load_bvh(m);
-    std::printf("  %-60s %6zu frames  %3d joints\n", m.c_str(), mo.clip.frames.size(), mo.skeleton.num_joints());
+    if (!a.quiet) std::printf("  %-60s %6zu frames  %3d joints\n", m.c_str(), mo.clip.frames.size(), mo.skeleton.num_joints());
   }
   DatasetDescription d = describe_dataset(good, motions, s);
-  for (TargetArg& t : targets) {
+  for (const BuildArgs::TargetArg& t : a.targets) {
     const auto it = std::find(good.begin(), good.end(), t.character);
     if (it == good.end())
       throw gatcore::InvalidArgument("--target " + t.character + ": the character did not load (see above)");
-    t.src.character = static_cast<std::int32_t>(it - good.begin());
-    d.targets.push_back(t.src);
+    FileTargetSource src = t.src;
+    src.character = static_cast<std::int32_t>(it - good.begin());
+    d.targets.push_back(src);
   }
   if (!test_list.empty() || !validation_list.empty()) {
     // An explicit split: every listed entry must name exactly one loaded character.
@@ -292,6 +215,104 @@ int cmd_dataset(int argc, char** argv) {
               d.split.validation.size(), d.split.test.size(), d.motions.size(), reference, d.targets.size(),
               d.joint_limits ? ("joint limits '" + d.joint_limits->name + "'").c_str() : "+-pose-angle per joint axis");
   return 0;
+}
+
+}  // namespace
+
+Runner setup_dataset(CLI::App& gat) {
+  CLI::App& c = add_command(gat, "dataset",
+                            "build a dataset description (characters, motions, split, reference deformer); export "
+                            "procedural characters and motions");
+  c.require_subcommand(1);
+  auto b = std::make_shared<BuildArgs>();
+  b->s.distortion_scales = {1, 4, 16};
+  CLI::App& build_cmd = add_command(c, "build", "check that every character and motion loads, write DATASET.json");
+  auto& s = b->s;
+  add_out(build_cmd, b->out, "the dataset description to write (DATASET.json)")->required();
+  build_cmd.add_option("CHARACTER", b->inputs,
+                       ".glb/.gltf/.fbx/.dae file, a directory of them, or procedural:humanoid:SEED / "
+                       "procedural:creature:SEED (a --target's character need not be listed again)")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  add_repeatable(build_cmd, "--motion", b->motions, "a BVH motion, retargeted onto every character");
+  build_cmd.add_option("--random-poses", s.random_poses, "random poses per character and epoch")
+      ->check(int_in(0, 1000000))->capture_default_str();
+  build_cmd.add_option("--pose-angle", s.pose_angle, "random joint angles within +-RAD per axis")
+      ->check(number_in(0, 3.2))->capture_default_str();
+  build_cmd.add_option("--motion-stride", s.motion_stride, "every K-th motion frame")
+      ->check(int_in(1, 1000000))->capture_default_str();
+  build_cmd.add_option("--seed", s.seed, "split, poses and windows")->check(int_in(0, 4294967295LL))->capture_default_str();
+  build_cmd.add_option("--subsample", s.subsample, "DenseGATs: consecutive vertices per sample (0: whole mesh)")
+      ->check(int_in(0, 1000000000))->capture_default_str();
+  build_cmd.add_option("--validation", s.validation,
+                       "fraction of characters that validate (at least one when the fraction is above 0 and there "
+                       "are 3 or more characters)")
+      ->check(number_in(0, 0.9))->capture_default_str();
+  build_cmd.add_option("--test", s.test, "fraction of characters held out for testing (as --validation)")
+      ->check(number_in(0, 0.9))->capture_default_str();
+  build_cmd.add_option("--dm-iterations", s.delta_mush.iterations, "the reference Delta Mush's smoothing iterations")
+      ->check(int_in(0, 10000))->capture_default_str();
+  build_cmd.add_option("--dm-step", s.delta_mush.step, "the reference Delta Mush's smoothing step")
+      ->check(number_in(1e-6, 1))->capture_default_str();
+  build_cmd.add_option("--reference", b->reference,
+                       "the built-in reference deformer the targets come from: delta_mush, or arap (as-rigid-as-"
+                       "possible on LBS, include/gatcore/character/deform/arap.hpp)")
+      ->check(one_of({"delta_mush", "arap"}))->capture_default_str();
+  build_cmd.add_option("--arap-iterations", s.arap.iterations, "ARAP's local/global iterations")
+      ->check(int_in(1, 10000))->capture_default_str();
+  build_cmd.add_option("--arap-handle-weight", s.arap.handle_weight,
+                       "ARAP: vertices whose dominant weight is at least W are handles (follow LBS)")
+      ->check(number_in(1e-6, 1))->capture_default_str();
+  build_cmd.add_option("--target", b->target_values,
+                       "CHARACTER TARGET MOTION: the character's own per-frame targets instead: TARGET a .pc2 point "
+                       "cache (or comma-separated .pc2, one per mesh, in the file's order) or a glTF with a "
+                       "morph-target animation (what gat deform writes); MOTION the BVH that drove it, or clip:NAME "
+                       "(the character file's own animation). Target frame k is motion frame FIRST + k * (the .pc2 "
+                       "sample rate); FIRST: the .pc2 start frame, 0 for a glTF, or --target-first-frame F after the "
+                       "--target. Vertex and frame counts are checked; the character trains and evaluates on its "
+                       "target frames only (every --motion-stride-th per epoch)")
+      ->expected(3)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  build_cmd.add_option("--target-first-frame", b->target_first_frames,
+                       "F: the motion frame of the preceding --target's first target frame")
+      ->check(number_in(-1e9, 1e9))->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  build_cmd.add_option("--target-animation", b->target_animations,
+                       "NAME: the preceding --target glTF's morph animation (default 'deform')")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  build_cmd.add_flag("--skip-bad", b->skip_bad, "skip unreadable characters (each named on stderr)");
+  build_cmd.add_option("--distortion-scales", b->distortion_scales,
+                       "K1,K2,... DenseGATs input columns: the skinning distortion of the mesh's detail coordinates "
+                       "at these smoothing scales (include/gatcore/character/deform/detail_distortion.hpp); 'none' = the "
+                       "paper's features only")
+      ->capture_default_str();
+  build_cmd.add_option("--joint-limits", b->joint_limits,
+                       "FILE|humanoid: per-joint random-pose limits (JSON table, see "
+                       "include/gatcore/character/rig/joint_limits.hpp; 'humanoid' = the built-in table); recorded in the "
+                       "dataset; without it every joint axis gets +-pose-angle");
+  build_cmd.add_option("--test-characters", b->test_list,
+                       "A,B,... an explicit split instead of the seeded one: each entry names one character by the "
+                       "end of its path (e.g. modular_men/Punk.glb); the rest train");
+  build_cmd.add_option("--validation-characters", b->validation_list, "C,D,... as --test-characters");
+  build_cmd.add_flag("-q,--quiet", b->quiet, "no progress line and no per-character lines: only the summary");
+
+  auto entry = std::make_shared<std::string>(), out = std::make_shared<std::string>();
+  CLI::App& xc = add_command(c, "export-character", "write a dataset character (e.g. procedural:humanoid:5) as a "
+                                                    "skinned glTF file");
+  xc.add_option("CHARACTER", *entry, "a dataset entry: a file or procedural:humanoid:SEED / procedural:creature:SEED")
+      ->required();
+  add_out(xc, *out, "the .glb / .gltf to write")->required();
+  CLI::App& xm = add_command(c, "export-motion", "write the built-in procedural swing motion (CMU joint names, 30 "
+                                                 "fps, default 24 frames) as BVH");
+  xm.add_option("MOTION", *entry, "procedural:swing[:FRAMES]")->required();
+  add_out(xm, *out, "the .bvh to write")->required();
+  return [b, entry, out, &build_cmd, &xc] {
+    if (build_cmd.parsed()) {
+      collect_targets(build_cmd, *b);
+      if (b->inputs.empty() && b->targets.empty())
+        throw gatcore::InvalidArgument("CHARACTER: give at least one character (or a --target)");
+      return build(*b);
+    }
+    if (xc.parsed()) return export_character(*entry, *out);
+    return export_motion(*entry, *out);
+  };
 }
 
 }  // namespace gat

@@ -19,6 +19,7 @@
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
+#include "progress.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore;
@@ -28,67 +29,21 @@ namespace gat {
 
 namespace {
 
-void usage(std::FILE* f) {
-  std::fprintf(f,
-               "usage: gat deform MODEL CHARACTER MOTION.bvh [-o OUT.glb] [--point-cache OUT.pc2] [--frames A:B]\n"
-               "                  [--device cpu|vulkan|auto] [--alias JOINT=BONE ...] [--threads T] [--quiet]\n"
-               "  Retargets the BVH motion onto CHARACTER (CMU joint names -> humanoid names), and for every\n"
-               "  frame adds the correction a displacement checkpoint (densegats, densegats-noself,\n"
-               "  densegats-nodense, origat; trained with gat train --data) predicts to linear blend skinning.\n"
-               "  -o OUT.glb/.gltf    CHARACTER (.glb/.gltf) with one morph target per frame and an animation\n"
-               "                      'deform' that steps through them (joints held at the bind pose; the\n"
-               "                      file's own animations are kept and play the plain skinned mesh)\n"
-               "  --point-cache F     the deformed file vertices per frame as a .pc2 point cache (world frame)\n"
-               "  --frames A:B        motion frames A .. B-1 (default all; A: and :B allowed)\n"
-               "  --device D          where the model runs (cpu default; see gat train --help)\n"
-               "  --alias JOINT=BONE  treat the character's joint JOINT as the model's bone BONE (repeatable)\n"
-               "  --quiet             no per-frame timing lines, only the summary\n");
-}
+struct DeformArgs {
+  std::string model_path, in, motion_path, out, pc2, frames_spec, up = "y";
+  long start_frame = 1;
+  std::vector<std::string> aliases;
+  bool verbose = false;
+  CommonOptions common;
+};
 
-}  // namespace
-
-int cmd_deform(int argc, char** argv) {
-  std::string model_path, in, motion_path, out, pc2, device = "cpu", frames_spec;
-  long threads = 0;
-  bool quiet = false;
+int run(const DeformArgs& a) {
+  const std::string &model_path = a.model_path, &in = a.in, &motion_path = a.motion_path, &out = a.out,
+                    &pc2 = a.pc2, &frames_spec = a.frames_spec;
+  const bool quiet = a.common.quiet;
   BoneAliases aliases;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw InvalidArgument(a + " expects a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") {
-      usage(stdout);
-      return 0;
-    } else if (a == "-o") {
-      out = value();
-    } else if (a == "--point-cache") {
-      pc2 = value();
-    } else if (a == "--frames") {
-      frames_spec = value();
-    } else if (a == "--device") {
-      device = value();
-    } else if (a == "--alias") {
-      add_alias(aliases, value());
-    } else if (a == "--threads") {
-      threads = parse_int(a, value(), 1, 1024);
-    } else if (a == "--quiet") {
-      quiet = true;
-    } else if (!a.empty() && a[0] != '-' && model_path.empty()) {
-      model_path = a;
-    } else if (!a.empty() && a[0] != '-' && in.empty()) {
-      in = a;
-    } else if (!a.empty() && a[0] != '-' && motion_path.empty()) {
-      motion_path = a;
-    } else {
-      throw InvalidArgument("unknown or extra argument '" + a + "'");
-    }
-  }
-  if (model_path.empty() || in.empty() || motion_path.empty() || (out.empty() && pc2.empty())) {
-    usage(stderr);
-    return 2;
-  }
+  for (const auto& al : a.aliases) add_alias(aliases, al);
+  GATCORE_CHECK(!out.empty() || !pc2.empty(), "nothing to write: give -o OUT.glb and / or --point-cache OUT.pc2");
   if (!out.empty()) {
     GATCORE_CHECK(is_gltf_path(out), out, ": the output must be a .glb or .gltf file");
     GATCORE_CHECK(is_gltf_path(in), in, ": -o bakes into the character's glTF file; for other formats write only "
@@ -100,8 +55,8 @@ int cmd_deform(int argc, char** argv) {
     GATCORE_CHECK(o.empty() || dir.empty() || std::filesystem::is_directory(dir), o, ": the directory ", dir.string(),
                   " does not exist");
   }
-  if (threads > 0) omp_set_num_threads(int(threads));
-  const Device dev = device_from_flag(device, "deform");
+  apply_threads(a.common);
+  const Device dev = device_from_flag(a.common.device, "deform");
   models::LoadedModel lm = models::load_checkpoint(model_path);
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::displacement);
   const Character ch = load_character(in);
@@ -134,7 +89,9 @@ int cmd_deform(int argc, char** argv) {
   baked.fps = clip.fps;
   double sum_f = 0, sum_i = 0, sum_t = 0, sum_corr = 0, max_corr = 0;
   const auto t_all = std::chrono::steady_clock::now();
+  Progress progress("deforming", last - first, "frames", quiet);
   for (long f = first; f < last; ++f) {
+    progress.update(f - first);
     const auto t0 = std::chrono::steady_clock::now();
     CorrectedFrame cf = deform_frame(d, *lm.model, lm.norm, clip.frames[static_cast<std::size_t>(f)]);
     const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -149,27 +106,24 @@ int cmd_deform(int argc, char** argv) {
     mean /= double(std::max<std::size_t>(1, cf.lbs.size() / 3));
     sum_corr += mean;
     sum_f += cf.ms_features, sum_i += cf.ms_inference, sum_t += total;
-    if (!quiet)
+    if (a.verbose && !quiet)
       std::printf("frame %4ld  features %7.1f ms  inference %7.1f ms  total %7.1f ms  mean correction %.5f\n", f,
                   cf.ms_features, cf.ms_inference, total, mean);
     baked.positions.push_back(std::move(cf.corrected));
   }
+  progress.finish();
   const double n = double(last - first);
   // Both outputs are complete in memory before either file is written.
-  bool pc2_written = false;
+  std::vector<std::string> pc2_paths;
+  std::vector<ObjectPointCache> caches;
   if (!pc2.empty()) {
-    PointCache pc;
-    pc.num_points = static_cast<std::int32_t>(ch.num_file_vertices());
-    pc.start_frame = static_cast<float>(first);
-    pc.sample_rate = 1.0f;
-    for (const auto& p : baked.positions) pc.samples.push_back(file_vertex_positions(ch, p));
-    write_point_cache(pc2, pc);
-    pc2_written = true;
+    caches = object_point_caches(ch, baked, a.up == "z" ? UpAxis::z : UpAxis::y, static_cast<float>(a.start_frame));
+    pc2_paths = write_object_point_caches(pc2, caches);
   }
   try {
     if (!out.empty()) save_gltf_morph_animation(in, ch, baked, out);
   } catch (...) {
-    if (pc2_written) std::remove(pc2.c_str());  // all outputs or none
+    for (const auto& p : pc2_paths) std::remove(p.c_str());  // all outputs or none
     throw;
   }
   std::printf("%ld frames in %.2f s: per frame features %.1f ms, inference %.1f ms, total %.1f ms (%.1f fps); "
@@ -177,8 +131,44 @@ int cmd_deform(int argc, char** argv) {
               last - first, std::chrono::duration<double>(std::chrono::steady_clock::now() - t_all).count(), sum_f / n,
               sum_i / n, sum_t / n, 1e3 * n / std::max(sum_t, 1e-9), sum_corr / n, max_corr);
   if (!out.empty()) std::printf("  morph targets + animation '%s' -> %s\n", baked.name.c_str(), out.c_str());
-  if (!pc2.empty()) std::printf("  point cache (%lld points) -> %s\n", static_cast<long long>(ch.num_file_vertices()), pc2.c_str());
+  for (std::size_t i = 0; i < pc2_paths.size(); ++i)
+    std::printf("  point cache of object '%s' (%d points, %s up, from frame %ld) -> %s\n", caches[i].object.c_str(),
+                caches[i].cache.num_points, a.up.c_str(), a.start_frame, pc2_paths[i].c_str());
   return 0;
+}
+
+}  // namespace
+
+Runner setup_deform(CLI::App& gat) {
+  auto a = std::make_shared<DeformArgs>();
+  CLI::App& c = add_command(gat, "deform",
+                            "a motion on a character with DenseGATs corrections, baked as morph targets / .pc2");
+  set_details(c, "Retargets the BVH motion onto CHARACTER (CMU joint names -> humanoid names), and for every frame "
+                "adds the correction a displacement checkpoint (densegats, densegats-noself, densegats-nodense, "
+                "origat; trained with gat train --data) predicts to linear blend skinning.");
+  c.add_option("MODEL", a->model_path, "a displacement checkpoint (.gcm)")->required();
+  c.add_option("CHARACTER", a->in, "the character (.glb / .gltf; others with --point-cache only)")->required();
+  c.add_option("MOTION", a->motion_path, "a BVH motion")->required();
+  add_out(c, a->out,
+          "CHARACTER (.glb/.gltf) with one morph target per frame and an animation 'deform' that steps through them "
+          "(joints held at the bind pose; the file's own animations are kept and play the plain skinned mesh)");
+  c.add_option("--point-cache", a->pc2,
+               "OUT.pc2: the deformed vertices per frame as point caches, one per mesh object of the character "
+               "(OUT.pc2 for a single mesh, else OUT_<object>.pc2), in the object's own coordinates (README: "
+               "Blender, Maya, Houdini)");
+  c.add_option("--up", a->up,
+               "the point caches' up axis: y (the file's, glTF's and Maya's) or z (Blender's and 3ds Max's: "
+               "Blender's Mesh Cache modifier then needs no axis settings)")
+      ->check(one_of({"y", "z"}))->capture_default_str();
+  c.add_option("--start-frame", a->start_frame, "the scene frame of the first cached frame (Blender starts at 1)")
+      ->check(int_in(-1000000, 1000000))->capture_default_str();
+  c.add_option("--frames", a->frames_spec, "A:B: motion frames A .. B-1 (default all; A: and :B allowed)");
+  add_repeatable(c, "--alias", a->aliases, "JOINT=BONE: treat the character's joint JOINT as the model's bone BONE");
+  add_device(c, a->common);
+  add_threads(c, a->common);
+  c.add_flag("-v,--verbose", a->verbose, "a timing line per frame");
+  add_quiet(c, a->common);
+  return [a] { return run(*a); };
 }
 
 }  // namespace gat

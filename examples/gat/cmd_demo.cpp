@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -15,7 +14,9 @@
 #include "gatcore/ops.hpp"
 #include "gatcore/optim.hpp"
 #include "gatcore/vulkan.hpp"
+#include "cli_util.hpp"
 #include "commands.hpp"
+#include "progress.hpp"
 #include "tube_character.hpp"
 
 using namespace gatcore;
@@ -134,62 +135,41 @@ std::pair<Tensor, Tensor> stack(const std::vector<Sample>& batch) {
   return {x, y};
 }
 
-int usage(int rc) {
-  std::fprintf(rc ? stderr : stdout,
-               "usage: gat demo [--epochs N] [--batch B] [--seed S] [--lr LR] [--device cpu|vulkan|auto]\n"
-               "  Trains a small DenseGATs-style network on the embedded two-bone tube to\n"
-               "  correct linear blend skinning, then reports held-out vertex errors.\n"
-               "  --device vulkan trains on the Vulkan device GATCORE_VK_DEVICE selects (or the\n"
-               "  first GPU); auto uses Vulkan when a GPU is there, else the CPU.\n");
-  return rc;
-}
+struct DemoArgs {
+  long epochs = 600, batch_size = 8, seed = 7;
+  float lr = 3e-3f;
+  gat::CommonOptions common;
+};
 
-bool parse_int(const char* flag, const char* v, long lo, long hi, long& out) {
-  char* end = nullptr;
-  long x = std::strtol(v, &end, 10);
-  if (!*v || *end || x < lo || x > hi) {
-    std::fprintf(stderr, "gat: %s expects an integer in [%ld, %ld], got '%s'\n", flag, lo, hi, v);
-    return false;
-  }
-  out = x;
-  return true;
-}
+int run_demo(const DemoArgs& a);
 
 }  // namespace
 
-int gat::cmd_demo(int argc, char** argv) {
-  long epochs = 600, batch_size = 8, seed = 7;
-  float lr = 3e-3f;
-  std::string device = "cpu";
-  for (int i = 1; i < argc; ++i) {
-    const bool has_value = i + 1 < argc;
-    if (!std::strcmp(argv[i], "--epochs") && has_value) {
-      if (!parse_int("--epochs", argv[++i], 1, 1000000, epochs)) return 2;
-    } else if (!std::strcmp(argv[i], "--batch") && has_value) {
-      if (!parse_int("--batch", argv[++i], 2, 256, batch_size)) return 2;
-    } else if (!std::strcmp(argv[i], "--seed") && has_value) {
-      if (!parse_int("--seed", argv[++i], 0, 2147483647L, seed)) return 2;
-    } else if (!std::strcmp(argv[i], "--device") && has_value) {
-      device = argv[++i];
-      if (device != "cpu" && device != "vulkan" && device != "auto") {
-        std::fprintf(stderr, "gat: --device expects cpu, vulkan or auto, got '%s'\n", device.c_str());
-        return 2;
-      }
-    } else if (!std::strcmp(argv[i], "--lr") && has_value) {
-      char* end = nullptr;
-      lr = std::strtof(argv[++i], &end);
-      if (*end || !(lr > 0.f) || !std::isfinite(lr)) {
-        std::fprintf(stderr, "gat: --lr expects a positive number, got '%s'\n", argv[i]);
-        return 2;
-      }
-    } else {
-      if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help")) return usage(0);
-      std::fprintf(stderr, "gat demo: unknown or incomplete option '%s'\n", argv[i]);
-      return usage(2);
-    }
-  }
+gat::Runner gat::setup_demo(CLI::App& gat) {
+  auto a = std::make_shared<DemoArgs>();
+  CLI::App& c = add_command(gat, "demo", "kernel smoke test: a small DenseGATs on the embedded two-bone tube vs LBS");
+  set_details(c, "Trains a small DenseGATs-style network on the embedded two-bone tube to correct linear blend "
+                "skinning, then reports held-out vertex errors; exits 1 unless the correction beats LBS. It shows "
+                "the kernels work; scripts/demo.sh runs the real pipeline on procedural characters.");
+  c.add_option("--epochs", a->epochs, "training steps")->check(int_in(1, 1000000))->capture_default_str();
+  c.add_option("--batch", a->batch_size, "poses per step")->check(int_in(2, 256))->capture_default_str();
+  add_seed(c, a->seed, "initialisation and pose seed");
+  c.add_option("--lr", a->lr, "learning rate")->check(positive_number())->capture_default_str();
+  add_device(c, a->common);
+  add_threads(c, a->common);
+  add_quiet(c, a->common);
+  return [a] {
+    apply_threads(a->common);
+    return run_demo(*a);
+  };
+}
 
-  const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
+namespace {
+
+int run_demo(const DemoArgs& a) {
+  const long epochs = a.epochs, batch_size = a.batch_size, seed = a.seed;
+  const float lr = a.lr;
+  const Device dev = gat::device_from_flag(a.common.device, "demo");
   std::mt19937 rng(static_cast<unsigned>(seed));
   const demo::TubeCharacter tube = demo::make_tube();
   const CsrGraph one = graph_from_triangles(tube.num_vertices(), tube.triangles);
@@ -221,7 +201,9 @@ int gat::cmd_demo(int argc, char** argv) {
   for (int k = 0; k < 16; ++k) held_out.push_back(make_sample(tube, random_pose(rng), disp_scale));
 
   const auto t0 = std::chrono::steady_clock::now();
+  gat::Progress progress("training", epochs, "epochs", a.common.quiet);
   for (long epoch = 1; epoch <= epochs; ++epoch) {
+    progress.update(epoch - 1);
     std::vector<Sample> batch;
     for (long b = 0; b < batch_size; ++b) batch.push_back(make_sample(tube, random_pose(rng), disp_scale));
     auto [x, y] = stack(batch);
@@ -235,9 +217,12 @@ int gat::cmd_demo(int argc, char** argv) {
       std::fprintf(stderr, "gat demo: training diverged at epoch %ld (loss %g); try a smaller --lr\n", epoch, l);
       return 1;
     }
-    if (epoch == 1 || epoch % 50 == 0 || epoch == epochs)
+    if (!a.common.quiet && (epoch == 1 || epoch % 50 == 0 || epoch == epochs)) {
+      progress.finish();
       std::printf("epoch %5ld  train MSE %.6f\n", epoch, l);
+    }
   }
+  progress.finish();
   const double train_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Held-out poses, full mesh, eval-mode BatchNorm, no tape.
@@ -280,3 +265,4 @@ int gat::cmd_demo(int argc, char** argv) {
   return 0;
 }
 
+}  // namespace

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <string>
 
 #include "cli_util.hpp"
@@ -32,77 +33,19 @@ namespace gat {
 
 namespace {
 
-void usage(std::FILE* f) {
-  std::fprintf(f,
-               "usage: gat distill TEACHER.gcm [--model NAME] [--out FILE] [--data DATASET] [--epochs N]\n"
-               "                   [--minutes M] [--hard A] [--samples N] [--lr LR] [--seed S] [--threads T]\n"
-               "  Trains a compact displacement model to imitate TEACHER (a densegats-family checkpoint\n"
-               "  trained with gat train --data): its targets are the teacher's predictions on each\n"
-               "  training sample. The result deforms like any checkpoint (gat deform, the runtime).\n"
-               "  --model NAME   the student, with its paper defaults (default origat; any displacement\n"
-               "                 model: densegats, densegats-noself, densegats-nodense, origat)\n"
-               "  --out FILE     the student checkpoint (default student.gcm), written after every epoch\n"
-               "  --data DATASET the dataset (default: the one TEACHER was trained on, metadata data_path)\n"
-               "  --epochs N     epochs (default 10); --minutes M: no new epoch after M minutes\n"
-               "  --hard A       weight of the ground truth in the targets, in [0, 1] (default 0: teacher only)\n"
-               "  --samples N    poses per character and epoch (default: all of the dataset's)\n"
-               "  --lr LR        initial learning rate (default 1e-3); --seed S (default 0); --threads T\n");
-}
-
-double number(const std::string& flag, const std::string& v, double lo, double hi) {
-  char* end = nullptr;
-  const double x = std::strtod(v.c_str(), &end);
-  GATCORE_CHECK(!v.empty() && !*end && std::isfinite(x) && x >= lo && x <= hi, flag, " expects a number in [", lo, ", ",
-                hi, "], got '", v, "'");
-  return x;
-}
-
-}  // namespace
-
-int cmd_distill(int argc, char** argv) {
+struct DistillArgs {
   std::string teacher_path, student_name = "origat", out = "student.gcm", data;
-  long epochs = 10, seed = 0, threads = 0, samples = 0;
+  long epochs = 10, seed = 0, samples = 0;
   double minutes = 0, hard = 0, lr = 1e-3;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw InvalidArgument(a + " expects a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") {
-      usage(stdout);
-      return 0;
-    } else if (a == "--model") {
-      student_name = value();
-    } else if (a == "--out") {
-      out = value();
-    } else if (a == "--data") {
-      data = value();
-    } else if (a == "--epochs") {
-      epochs = parse_int(a, value(), 1, 10000000);
-    } else if (a == "--minutes") {
-      minutes = number(a, value(), 1e-6, 1e9);
-    } else if (a == "--hard") {
-      hard = number(a, value(), 0, 1);
-    } else if (a == "--samples") {
-      samples = parse_int(a, value(), 1, 1000000);
-    } else if (a == "--lr") {
-      lr = number(a, value(), 1e-12, 10);
-    } else if (a == "--seed") {
-      seed = parse_int(a, value(), 0, 2147483647L);
-    } else if (a == "--threads") {
-      threads = parse_int(a, value(), 1, 1024);
-    } else if (!a.empty() && a[0] != '-' && teacher_path.empty()) {
-      teacher_path = a;
-    } else {
-      throw InvalidArgument("unknown or extra argument '" + a + "'");
-    }
-  }
-  if (teacher_path.empty()) {
-    usage(stderr);
-    return 2;
-  }
-  if (threads > 0) omp_set_num_threads(int(threads));
+  CommonOptions common;
+};
+
+int run_distill(const DistillArgs& a) {
+  const std::string teacher_path = a.teacher_path, student_name = a.student_name, out = a.out;
+  std::string data = a.data;
+  const long epochs = a.epochs, seed = a.seed, samples = a.samples;
+  const double minutes = a.minutes, hard = a.hard, lr = a.lr;
+  apply_threads(a.common);
   const std::filesystem::path out_dir = std::filesystem::path(out).parent_path();
   GATCORE_CHECK(out_dir.empty() || std::filesystem::is_directory(out_dir), out, ": the directory ", out_dir.string(),
                 " does not exist");
@@ -176,6 +119,35 @@ int cmd_distill(int argc, char** argv) {
   }
   std::printf("distilled %ld epochs; student written to %s\n", epochs, out.c_str());
   return 0;
+}
+
+}  // namespace
+
+Runner setup_distill(CLI::App& gat) {
+  auto a = std::make_shared<DistillArgs>();
+  CLI::App& c = add_command(gat, "distill",
+                            "train a compact deploy model (e.g. origat) to imitate a large displacement model");
+  set_details(c, "Trains a compact displacement model to imitate TEACHER (a densegats-family checkpoint trained with "
+                 "gat train --data): its targets are the teacher's predictions on each training sample. The result "
+                 "deforms like any checkpoint (gat deform, the runtime).");
+  c.add_option("TEACHER", a->teacher_path, "the teacher checkpoint (.gcm)")->required();
+  c.add_option("--model", a->student_name,
+               "the student, with its paper defaults (any displacement model: densegats, densegats-noself, "
+               "densegats-nodense, origat)")
+      ->capture_default_str();
+  add_out(c, a->out, "the student checkpoint, written after every epoch")->capture_default_str();
+  c.add_option("--data", a->data, "the dataset (default: the one TEACHER was trained on, metadata data_path)");
+  c.add_option("--epochs", a->epochs, "epochs")->check(int_in(1, 10000000))->capture_default_str();
+  c.add_option("--minutes", a->minutes, "no new epoch after M minutes")->check(number_in(1e-6, 1e9));
+  c.add_option("--hard", a->hard, "weight of the ground truth in the targets, in [0, 1] (0: teacher only)")
+      ->check(number_in(0, 1))->capture_default_str();
+  c.add_option("--samples", a->samples, "poses per character and epoch (default: all of the dataset's)")
+      ->check(int_in(1, 1000000));
+  c.add_option("--lr", a->lr, "initial learning rate")->check(number_in(1e-12, 10))->capture_default_str();
+  add_seed(c, a->seed, "the student's initialisation and the samples");
+  add_threads(c, a->common);
+  add_quiet(c, a->common);
+  return [a] { return run_distill(*a); };
 }
 
 }  // namespace gat

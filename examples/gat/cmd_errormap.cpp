@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <random>
 #include <string>
 
@@ -22,51 +21,22 @@ using namespace gatcore::character;
 
 namespace gat {
 
-int cmd_errormap(int argc, char** argv) {
+namespace {
+
+struct ErrormapArgs {
   std::string in, out, motion;
-  unsigned seed = 1;
+  long seed = 1, frame = 0;
   float angle = 0.6f;
-  long frame = 0;
+  std::vector<std::string> aliases;
+};
+
+int run_errormap(const ErrormapArgs& a) {
+  const std::string &in = a.in, &out = a.out, &motion = a.motion;
+  const long frame = a.frame;
+  const float angle = a.angle;
+  const unsigned seed = static_cast<unsigned>(a.seed);
   BoneAliases aliases;
-  auto usage = [](std::FILE* f) {
-    std::fprintf(f,
-                 "usage: gat errormap CHARACTER -o OUT.png [--seed N] [--angle RAD] [--motion M.bvh --frame F]\n"
-                 "                     [--alias JOINT=PART ...]\n"
-                 "  renders |Delta Mush - LBS| per vertex for a random pose (joint angles within +-RAD)\n"
-                 "  or for frame F of a BVH motion retargeted through the rig conventions (gat info shows\n"
-                 "  the body map; --alias names a joint the map misses, e.g. Bone.012=thigh.l)\n");
-  };
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw gatcore::InvalidArgument(a + " expects a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") {
-      usage(stdout);
-      return 0;
-    } else if (a == "-o") {
-      out = value();
-    } else if (a == "--seed") {
-      seed = static_cast<unsigned>(std::strtoul(value().c_str(), nullptr, 10));
-    } else if (a == "--angle") {
-      angle = std::strtof(value().c_str(), nullptr);
-    } else if (a == "--motion") {
-      motion = value();
-    } else if (a == "--frame") {
-      frame = std::strtol(value().c_str(), nullptr, 10);
-    } else if (a == "--alias") {
-      add_alias(aliases, value());
-    } else if (in.empty() && a[0] != '-') {
-      in = a;
-    } else {
-      throw gatcore::InvalidArgument("unknown argument '" + a + "'");
-    }
-  }
-  if (in.empty() || out.empty()) {
-    usage(stderr);
-    return 2;
-  }
+  for (const auto& al : a.aliases) add_alias(aliases, al);
   const PreparedCharacter pc = prepare_character(load_character(in));
   Pose pose;
   if (!motion.empty()) {
@@ -95,6 +65,31 @@ int cmd_errormap(int argc, char** argv) {
   std::printf("%s: %zu vertices, |Delta Mush - LBS| mean %.5f max %.5f (character heights) -> %s\n", in.c_str(),
               err.size(), err.empty() ? 0.0 : mean / err.size(), mx, out.c_str());
   return 0;
+}
+
+}  // namespace
+
+Runner setup_errormap(CLI::App& gat) {
+  auto a = std::make_shared<ErrormapArgs>();
+  CLI::App& c = add_command(gat, "errormap",
+                            "render where LBS departs from the reference deformer (Delta Mush) as a PNG");
+  set_details(c, "Renders |Delta Mush - LBS| per vertex for a random pose (joint angles within +-RAD) or for frame F "
+                "of a BVH motion retargeted through the rig conventions (gat info shows the body map), with a colour bar in "
+                "character heights.");
+  c.add_option("CHARACTER", a->in, "a character file (.glb / .gltf / .fbx / .dae)")->required();
+  add_out(c, a->out, "the PNG to write")->required();
+  add_seed(c, a->seed, "the random pose");
+  c.add_option("--angle", a->angle, "random joint angles within +-RAD")->check(number_in(0, 3.2))->capture_default_str();
+  c.add_option("--motion", a->motion, "pose from a BVH motion instead of a random pose");
+  c.add_option("--frame", a->frame, "the motion's frame")->check(int_in(0, 100000000))->capture_default_str();
+  add_repeatable(c, "--alias", a->aliases,
+                 "JOINT=PART: names a joint the rig-convention map misses (gat info shows the body map), e.g. "
+                 "Bone.012=thigh.l");
+  return [a, &c] {
+    GATCORE_CHECK(a->motion.empty() ? !c.count("--frame") : !c.count("--seed") && !c.count("--angle"),
+                  a->motion.empty() ? "--frame needs --motion" : "--seed / --angle pick a random pose; not with --motion");
+    return run_errormap(*a);
+  };
 }
 
 }  // namespace gat

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <algorithm>
 #include <filesystem>
 #include <memory>
@@ -12,12 +11,14 @@
 #include <string>
 #include <vector>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
+#include "progress.hpp"
 #include "eval_motion.hpp"
 #include "eval_weight_baseline.hpp"
+#include "gatcore/character/viz/render.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
-#include "gatcore/character/viz/render.hpp"
 #include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
@@ -28,100 +29,131 @@ using namespace gatcore::models;
 
 namespace {
 
-int usage(int rc) {
-  std::fprintf(rc ? stderr : stdout,
-               "usage: gat eval --model FILE [--samples N] [--seed S] [--data DATASET] [--part P]\n"
-               "                [--device cpu|vulkan|auto] [--min-weight W]\n"
-               "       gat eval --baseline bone-heat --data DATASET [--part P] [--poses K] [--min-weight W] [--json FILE]\n"
-               "  Evaluates a checkpoint written by gat train on N held-out samples (default 16) of the\n"
-               "  embedded tube data (seed S, default 12345; not the training seeds): loss, and per-vertex\n"
-               "  error (displacements, in mesh units) or L1 weight error / bone precision and recall\n"
-               "  (skin weights, top-k post-processed).\n"
-               "  --data DATASET  evaluate on a dataset's characters instead (default: the dataset the\n"
-               "                  checkpoint was trained on, if any); displacement: N poses per character\n"
-               "  --part P        test (default), validation or train characters of the dataset\n"
-               "  Skin-weight models on a dataset also print a per-character Markdown table (NeuroSkinning's\n"
-               "  metrics: bone precision / recall at 1e-4, L1 weight error, deformation error at the two\n"
-               "  worst random poses / height):\n"
-               "  --poses K       random poses per character for the deformation error (default 16; the\n"
-               "                  dataset's pose angle; pose seed = --seed)\n"
-               "  --json FILE     also write the table as JSON\n"
-               "  --min-weight W  drop predicted influences below W of the vertex's total (renormalised) before\n"
-               "                  the metrics (default 0; bone heat: 0.01)\n"
-               "  --baseline bone-heat  the same table for a classical method instead of a model: Baran &\n"
-               "                  Popovic's bone heat (Blender's automatic weights), top 4 influences\n"
-               "  --errormaps DIR per-vertex L1 weight-error colour maps, DIR/<character>.png\n"
-               "  --size PX       error-map size (default 320)\n"
-               "  --device D      cpu (default), vulkan or auto: where the model runs (see gat train --help)\n"
-               "  --motion M.bvh  evaluate displacement models and the LBS / DQS baselines on every frame of\n"
-               "                  retargeted motions instead (gat eval --motion X --help for its options)\n"
-               "  --targets       the same on the frames of the characters' file targets (gat dataset build --target)\n");
-  return rc;
-}
+struct EvalArgs {
+  std::vector<std::string> models;
+  std::string data, part = "test", json_path, errormap_dir, baseline;
+  long samples = 16, seed = 12345, poses = 16, size = 320;
+  double min_weight = 0;
+  gat::EvalMotionArgs motion;
+  gat::CommonOptions common;
+};
+
+int run_eval(const EvalArgs& a);
 
 }  // namespace
 
-int gat::cmd_eval(int argc, char** argv) {
-  // Motion evaluation against the reference deformer, with baselines (eval_motion.cpp).
-  for (int i = 1; i < argc; ++i)
-    if (!std::strcmp(argv[i], "--motion") || !std::strcmp(argv[i], "--targets")) return gat::eval_motion(argc, argv);
-  std::string path, data, part = "test", device = "cpu", json_path, errormap_dir, baseline;
-  long samples = 16, seed = 12345, poses = 16, size = 320;
-  double min_weight = -1;
-  for (int i = 1; i < argc; ++i) {
-    const bool v = i + 1 < argc;
-    if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help")) return usage(0);
-    if (!std::strcmp(argv[i], "--model") && v) path = argv[++i];
-    else if (!std::strcmp(argv[i], "--data") && v) data = argv[++i];
-    else if (!std::strcmp(argv[i], "--part") && v) part = argv[++i];
-    else if (!std::strcmp(argv[i], "--samples") && v) samples = std::strtol(argv[++i], nullptr, 10);
-    else if (!std::strcmp(argv[i], "--seed") && v) seed = std::strtol(argv[++i], nullptr, 10);
-    else if (!std::strcmp(argv[i], "--poses") && v) poses = std::strtol(argv[++i], nullptr, 10);
-    else if (!std::strcmp(argv[i], "--size") && v) size = std::strtol(argv[++i], nullptr, 10);
-    else if (!std::strcmp(argv[i], "--json") && v) json_path = argv[++i];
-    else if (!std::strcmp(argv[i], "--errormaps") && v) errormap_dir = argv[++i];
-    else if (!std::strcmp(argv[i], "--baseline") && v) baseline = argv[++i];
-    else if (!std::strcmp(argv[i], "--min-weight") && v) {
-      char* end = nullptr;
-      min_weight = std::strtod(argv[++i], &end);
-      if (*end || !(min_weight >= 0 && min_weight < 1)) {
-        std::fprintf(stderr, "gat eval: --min-weight expects a number in [0, 1), got '%s'\n", argv[i]);
-        return 2;
-      }
+gat::Runner gat::setup_eval(CLI::App& gat) {
+  auto a = std::make_shared<EvalArgs>();
+  CLI::App& c = add_command(gat, "eval", "evaluate a checkpoint");
+  set_details(c, 
+      "Evaluates a checkpoint written by gat train on N held-out samples of the embedded tube data (not the training "
+      "seeds) or of a dataset's characters: loss, and per-vertex error (displacements, in mesh units) or L1 weight "
+      "error / bone precision and recall (skin weights, top-k post-processed). Skin-weight models on a dataset also "
+      "print a per-character Markdown table (NeuroSkinning's metrics: bone precision / recall at 1e-4, L1 weight "
+      "error, deformation error at the two worst random poses / height).\n"
+      "With --motion: displacement models (LBS + predicted offsets) and the LBS and DQS baselines against the "
+      "dataset's reference deformer (Delta Mush on LBS) on every K-th frame of each motion retargeted onto each "
+      "character of the part: per-vertex distance mean / max / min per character and motion, per character, "
+      "overall.");
+  add_repeatable(c, "--model", a->models, "the checkpoint; with --motion: [LABEL=]FILE (each model gets a column)");
+  c.add_option("--baseline", a->baseline,
+               "the skin-weight table for a classical method instead of a model (needs --data): bone-heat, Baran & "
+               "Popovic's heat diffusion (Blender's automatic weights), top 4 influences")
+      ->check(one_of({"bone-heat"}));
+  c.add_option("--min-weight", a->min_weight,
+               "skin weights: drop predicted influences below W of the vertex's total (renormalised) before the "
+               "metrics (default 0; bone heat: 0.01)")
+      ->check(number_in(0, 0.999999));
+  c.add_option("--data", a->data,
+               "evaluate on a dataset's characters (default: the dataset the checkpoint was trained on, if any; "
+               "required with --motion); displacement: N poses per character");
+  c.add_option("--part", a->part, "which characters of the dataset")
+      ->check(one_of({"test", "validation", "train"}))->capture_default_str();
+  c.add_option("--json", a->json_path, "also write the table as JSON");
+  c.add_option("--errormaps", a->errormap_dir,
+               "per-vertex error colour maps into DIR (skin weights: L1 weight error, DIR/<character>.png; "
+               "--motion: see below)");
+  add_device(c, a->common);
+  add_threads(c, a->common);
+  add_quiet(c, a->common);
+  const char* plain = "Without --motion";
+  c.add_option("--samples", a->samples, "held-out samples (tube data) / poses per character (dataset)")
+      ->check(int_in(1, 1000000))->capture_default_str()->group(plain);
+  add_seed(c, a->seed, "tube samples and the random poses of the deformation error")->group(plain);
+  c.add_option("--poses", a->poses, "random poses per character for the deformation error (the dataset's pose angle)")
+      ->check(int_in(0, 100000))->capture_default_str()->group(plain);
+  c.add_option("--size", a->size, "error-map size in pixels")->check(int_in(16, 8192))->capture_default_str()->group(plain);
+  const char* mo = "With --motion";
+  auto& m = a->motion;
+  add_repeatable(c, "--motion", m.motions, "a BVH motion to evaluate displacement models on")->group(mo);
+  c.add_flag("--targets", m.targets,
+             "evaluate on the frames of the characters' file targets (gat dataset build --target) instead; no "
+             "--motion needed (characters with targets are always evaluated on them)")
+      ->group(mo);
+  c.add_flag("--linear-probe", m.linear_probe,
+             "also evaluate the least-squares linear map of the models' input columns to the target, fitted on the "
+             "training characters' epoch-0 poses (the linear probe a network has to beat; gat train --linear-skip "
+             "starts there)")
+      ->group(mo);
+  c.add_option("--max-limit-excess", m.max_limit_excess_deg,
+               "leave out frames whose pose leaves the dataset's random-pose joint limits (what training covered) "
+               "by more than DEG degrees on some joint axis (counted as frames_excluded)")
+      ->check(number_in(0, 360))->group(mo);
+  c.add_option("--stride", m.stride, "every K-th frame")->check(int_in(1, 1000000))->capture_default_str()->group(mo);
+  c.add_option("--markdown", m.markdown, "also write the tables as Markdown")->group(mo);
+  c.add_option("--errormap-frames", m.errormap_frames,
+               "frames of the first motion per character and method with error maps (one colour scale per frame: "
+               "blue 0, red the 99th percentile of LBS's error in that frame, in the JSON, and above)")
+      ->check(int_in(0, 1000))->capture_default_str()->group(mo);
+  c.add_option("--errormap-size", m.errormap_size, "error-map size in pixels")
+      ->check(int_in(32, 4096))->capture_default_str()->group(mo);
+  add_repeatable(c, "--loss-curve", m.loss_curves,
+               "LABEL=LOG: plots the train / validation loss per epoch of a `gat train` log (its 'epoch N/M  train "
+               "loss X  val loss Y' lines) to DIR/loss_LABEL.png (repeatable; needs --errormaps DIR)")->group(mo);
+  c.add_option("--cm-per-unit", m.cm_per_unit,
+               "centimetres per world unit (default: 100 for glTF files, whose unit is the metre; unknown for other "
+               "sources unless given)")
+      ->check(positive_number())->group(mo);
+  return [a, &c] {
+    const bool motion = !a->motion.motions.empty() || a->motion.targets;
+    // Each mode's options are refused in the other, naming them.
+    for (const char* o : {"--samples", "--seed", "--poses", "--size", "--device"})
+      GATCORE_CHECK(!motion || !c.count(o), o, " does not apply with --motion");
+    for (const char* o : {"--stride", "--markdown", "--errormap-frames", "--errormap-size", "--loss-curve",
+                          "--cm-per-unit", "--linear-probe", "--max-limit-excess"})
+      GATCORE_CHECK(motion || !c.count(o), o, " applies only with --motion or --targets");
+    for (const char* o : {"--baseline", "--min-weight"})
+      GATCORE_CHECK(!motion || !c.count(o), o, " does not apply with --motion");
+    apply_threads(a->common);
+    if (motion) {
+      EvalMotionArgs m = a->motion;
+      m.models = a->models, m.data = a->data, m.part = a->part, m.json = a->json_path, m.errormaps = a->errormap_dir;
+      m.quiet = a->common.quiet;
+      return eval_motion(m);
     }
-    else if (!std::strcmp(argv[i], "--device") && v) {
-      device = argv[++i];
-      if (device != "cpu" && device != "vulkan" && device != "auto") {
-        std::fprintf(stderr, "gat eval: --device expects cpu, vulkan or auto, got '%s'\n", device.c_str());
-        return 2;
-      }
+    if (!a->baseline.empty()) {
+      GATCORE_CHECK(a->models.empty(), "--baseline evaluates a classical method; drop --model");
+      GATCORE_CHECK(!a->data.empty(), "--baseline needs --data DATASET");
+      return eval_weight_baseline(a->baseline, a->data, a->part, a->poses, a->seed,
+                                  c.count("--min-weight") ? a->min_weight : -1.0, a->json_path);
     }
-    else {
-      std::fprintf(stderr, "gat eval: unknown or incomplete option '%s'\n", argv[i]);
-      return usage(2);
-    }
-  }
-  if (!baseline.empty()) return gat::eval_weight_baseline(baseline, data, part, poses, seed, min_weight, json_path);
-  if (path.empty()) {
-    std::fprintf(stderr, "gat eval: --model FILE (or --baseline) is required\n");
-    return usage(2);
-  }
-  if (samples < 1 || samples > 1000000) {
-    std::fprintf(stderr, "gat eval: --samples expects [1, 1000000] (got %ld)\n", samples);
-    return 2;
-  }
-  if (poses < 0 || poses > 100000 || size < 16 || size > 8192) {
-    std::fprintf(stderr, "gat eval: --poses expects [0, 100000] (got %ld), --size [16, 8192] (got %ld)\n", poses, size);
-    return 2;
-  }
-  const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
+    GATCORE_CHECK(!a->models.empty(), "--model is required (or --baseline)");
+    GATCORE_CHECK(a->models.size() == 1, "--model: give one checkpoint (got ", a->models.size(),
+                  "); several are compared with --motion");
+    return run_eval(*a);
+  };
+}
+
+namespace {
+
+int run_eval(const EvalArgs& a) {
+  std::string path = a.models[0], data = a.data;
+  const std::string part = a.part, json_path = a.json_path, errormap_dir = a.errormap_dir;
+  const long samples = a.samples, seed = a.seed, poses = a.poses, size = a.size;
+  const Device dev = gat::device_from_flag(a.common.device, "eval");
   LoadedModel l = load_checkpoint(path);
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
-  if (part != "test" && part != "validation" && part != "train") {
-    std::fprintf(stderr, "gat eval: --part expects test, validation or train, got '%s'\n", part.c_str());
-    return 2;
-  }
   const auto& md = l.file.metadata;
   if (data.empty() && md.count("data_path")) data = md.at("data_path");
   std::vector<Sample> samples_;
@@ -180,7 +212,9 @@ int gat::cmd_eval(int argc, char** argv) {
   constexpr std::size_t kStats = 7;
   std::vector<double> stats(data_.size() * kStats, 0.0);
   std::vector<Tensor> predictions(data_.size());
+  gat::Progress pred_progress("predicting", std::int64_t(data_.size()), "samples", a.common.quiet || !root);
   for (std::size_t k = 0; k < data_.size(); ++k) {
+    pred_progress.update(std::int64_t(k));
     if (!mine(k)) continue;
     const Sample& s = data_[k];
     Tensor y = predict(m, s, l.norm, cfg.task == Task::weights ? cfg.top_k : 0);
@@ -206,6 +240,7 @@ int gat::cmd_eval(int argc, char** argv) {
     const double row[kStats] = {err, maxerr, base, double(count), double(tp), double(fp), double(fn)};
     std::copy(row, row + kStats, stats.begin() + std::ptrdiff_t(k * kStats));
   }
+  pred_progress.finish();
   comm.sum(stats.data(), stats.size());
   double err = 0, maxerr = 0, base = 0;
   std::int64_t count = 0, tp = 0, fp = 0, fn = 0;
@@ -228,12 +263,15 @@ int gat::cmd_eval(int argc, char** argv) {
       eo.poses = int(poses);
       eo.pose_angle = td.description.pose_angle;
       eo.seed = std::uint32_t(seed);
-      eo.min_weight = min_weight > 0 ? float(min_weight) : 0.0f;
+      eo.min_weight = float(a.min_weight);
       // Each character on the rank that predicted it; the figures gathered as above.
       constexpr std::size_t kFields = 11;
       std::vector<double> fields(data_.size() * kFields, 0.0);
       std::vector<character::CharacterWeightEval> per(data_.size());
+      gat::Progress progress("evaluating " + part + " characters", std::int64_t(data_.size()), "characters",
+                             a.common.quiet || !root);
       for (std::size_t i = 0; i < data_.size(); ++i) {
+        progress.update(std::int64_t(i), std::filesystem::path(data_[i].name).stem().string());
         const std::int32_t c = chars[i];
         per[i].name = std::filesystem::path(data_[i].name).parent_path().filename().string() + "/" +
                       std::filesystem::path(data_[i].name).stem().string();
@@ -263,6 +301,7 @@ int gat::cmd_eval(int argc, char** argv) {
                                    r.deformation.min, double(r.deformation.count), r.dominant};
         std::copy(f, f + kFields, fields.begin() + std::ptrdiff_t(i * kFields));
       }
+      progress.finish();
       comm.sum(fields.data(), fields.size());
       for (std::size_t i = 0; i < data_.size(); ++i) {
         const double* f = fields.data() + i * kFields;
@@ -296,3 +335,5 @@ int gat::cmd_eval(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace

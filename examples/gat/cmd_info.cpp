@@ -19,6 +19,7 @@
 #include "gatcore/character/features/features.hpp"
 #include "gatcore/character/rig/rig_convention.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
+#include "progress.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 
@@ -193,14 +194,8 @@ void print_model(const std::string& path) {
 
 }  // namespace
 
-int cmd_info(int argc, char** argv) {
-  if (argc != 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
-    std::fprintf(argc == 2 ? stdout : stderr,
-                 "usage: gat info FILE\n  FILE: a character (.glb / .gltf / .fbx / .dae), a motion (.bvh), a dataset (.json) or a\n"
-                 "        point cache (.pc2, as gat deform writes) or a model checkpoint (.gcm / .safetensors)\n");
-    return argc == 2 ? 0 : 2;
-  }
-  const std::string path = argv[1];
+static int run_info(const std::string& path) {
+  Activity doing("reading " + path);
   if (ends_with(path, ".glb") || ends_with(path, ".gltf") || ends_with(path, ".fbx") || ends_with(path, ".dae")) {
     print_character(load_character(path));
     return 0;
@@ -223,6 +218,16 @@ int cmd_info(int argc, char** argv) {
   }
   throw gatcore::InvalidArgument(path +
                                  ": unknown file type (expected .glb, .gltf, .fbx, .dae, .bvh, .pc2, .gcm / .safetensors or a dataset .json)");
+}
+
+Runner setup_info(CLI::App& gat) {
+  auto path = std::make_shared<std::string>();
+  CLI::App& c = add_command(gat, "info", "print what a character, motion, dataset, point cache or model file holds");
+  c.add_option("FILE", *path,
+               "a character (.glb / .gltf / .fbx / .dae), a motion (.bvh), a dataset (.json), a point cache (.pc2, "
+               "as gat deform writes) or a model checkpoint (.gcm / .safetensors)")
+      ->required();
+  return [path] { return run_info(*path); };
 }
 
 }  // namespace gat

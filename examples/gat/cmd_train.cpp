@@ -3,14 +3,12 @@
 // handling. It trains on a dataset of the character pipeline (--data, see
 // character/data/training_data.hpp) or on the embedded tube character
 // (tube_data.hpp).
-#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -19,11 +17,12 @@
 
 #include <omp.h>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
-#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
 #include "gatcore/character/data/training_data.hpp"
+#include "progress.hpp"
 #include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/linear_skip.hpp"
@@ -44,61 +43,15 @@ void on_sigint(int) {
   g_stop = 1;
 }
 
-int usage(int rc) {
-  std::fprintf(rc ? stderr : stdout,
-               "usage: gat train [--model NAME] [--task T] [--out FILE] [--epochs N] [--resume FILE] [--seed S]\n"
-               "                 [--threads T] [--batch B] [--lr LR] [--samples N] [--data DATASET]\n"
-               "                 [--device cpu|vulkan|auto] [--minutes M] [--loss-curve FILE.png]\n"
-               "                 [--val-every K] [--sample-vertices V] [--loss mse|l1] [--linear-skip]\n"
-               "  Trains a model and writes a resumable checkpoint (safetensors + metadata) after\n"
-               "  every epoch. Ctrl-C stops after the current epoch's checkpoint is written.\n"
-               "  --model NAME   densegats (default), densegats-noself, densegats-nodense, origat,\n"
-               "                 neuroskinning, neuroskinning-nopool, fc, pointnet; paper settings\n"
-               "  --task T       weights or displacement (default: the model's paper task; e.g.\n"
-               "                 --model neuroskinning --task displacement is DenseGATs' comparison)\n"
-               "  --loss L       displacement loss: mse (default, the paper) or l1 (mean absolute error:\n"
-               "                 keeps LBS where unsure; closer to the mean vertex error gat eval reports)\n"
-               "  --linear-skip  densegats family: add a per-vertex linear map of the input columns to the\n"
-               "                 output, set to the least-squares fit of the training targets before the\n"
-               "                 first epoch (the graph network learns the residual; recorded in the\n"
-               "                 checkpoint's configuration; not the paper's architecture)\n"
-               "  --out FILE     checkpoint path (default model.gcm)\n"
-               "  --epochs N     epochs to train, in total when resuming (default 10)\n"
-               "  --resume FILE  continue from a checkpoint written by gat train (model, data, seed\n"
-               "                 and batch size from the file)\n"
-               "  --seed S       initialisation, sampling and data seed (default 0)\n"
-               "  --threads T    OpenMP threads (default: all cores)\n"
-               "  --batch B      characters per batch (default: paper, 8 or 12)\n"
-               "  --lr LR        initial learning rate (default 1e-3)\n"
-               "  --minutes M    time budget: no new epoch starts once M minutes of training have\n"
-               "                 passed (the epoch running then finishes; --epochs still caps it)\n"
-               "  --samples N    training samples of the embedded data (default 64; 8 more validate);\n"
-               "                 with --data: poses per character and epoch (default: all of the dataset's)\n"
-               "  --data DATASET a dataset written by gat dataset build: trains on its training characters,\n"
-               "                 validates on its validation characters (bones: the dataset's super skeleton)\n"
-               "  --device D     cpu (default), vulkan (the device GATCORE_VK_DEVICE selects, else the\n"
-               "                 first GPU; lavapipe needs GATCORE_VK_ALLOW_CPU=1) or auto (Vulkan when a\n"
-               "                 GPU is there, else the CPU); checkpoints are the same on every device\n"
-               "  --loss-curve F the loss curve picture, rewritten after every epoch (default: the checkpoint's\n"
-               "                 path with .loss.png for its extension); the losses also go to F's .csv\n"
-               "  --val-every K  validate every K-th epoch and after the last one (default 1)\n"
-               "  --sample-vertices V  vertices per training sample (default: paper, 1000 or 2048)\n"
-               "  Without --data the embedded tube character is used: displacement models learn the\n"
-               "  correction of LBS in random bend/twist poses; skin-weight models learn the\n"
-               "  two-bone weights of tubes of varying resolution.\n");
-  return rc;
-}
-
-bool parse_long(const char* flag, const char* v, long lo, long hi, long& out) {
-  char* end = nullptr;
-  const long x = std::strtol(v, &end, 10);
-  if (!*v || *end || x < lo || x > hi) {
-    std::fprintf(stderr, "gat train: %s expects an integer in [%ld, %ld], got '%s'\n", flag, lo, hi, v);
-    return false;
-  }
-  out = x;
-  return true;
-}
+struct TrainArgs {
+  std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss;
+  long epochs = 10, seed = 0, batch = 0, samples = 64;
+  float lr = 1e-3f;
+  double minutes = 0;  // 0: no time budget
+  long val_every = 1, sample_vertices = 0;
+  bool linear_skip = false;
+  gat::CommonOptions common;
+};
 
 // Fault injection for the data-parallel tests (tests/dist/): GAT_TRAIN_FAULT=R:S
 // makes rank R kill itself (SIGKILL, no clean-up) once it has taken S optimiser steps.
@@ -113,81 +66,81 @@ void maybe_inject_fault(int rank, long steps) {
   }
 }
 
-std::string hms(double s) {
-  const long t = long(s + 0.5);
-  char b[32];
-  std::snprintf(b, sizeof b, "%02ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
-  return b;
-}
+int run_train(TrainArgs a);
 
 }  // namespace
 
-int gat::cmd_train(int argc, char** argv) {
-  std::string model_name = "densegats", out = "model.gcm", resume, data, task, device = "cpu", curve, loss;
-  long epochs = 10, seed = 0, threads = 0, batch = 0, samples = 64;
-  bool samples_set = false, linear_skip = false;
-  float lr = 1e-3f;
-  double minutes = 0;  // 0: no time budget
-  long val_every = 1, sample_vertices = 0;
-  for (int i = 1; i < argc; ++i) {
-    const bool v = i + 1 < argc;
-    const char* a = argv[i];
-    if (!std::strcmp(a, "-h") || !std::strcmp(a, "--help")) return usage(0);
-    if (!std::strcmp(a, "--model") && v) model_name = argv[++i];
-    else if (!std::strcmp(a, "--out") && v) out = argv[++i];
-    else if (!std::strcmp(a, "--resume") && v) resume = argv[++i];
-    else if (!std::strcmp(a, "--data") && v) data = argv[++i];
-    else if (!std::strcmp(a, "--linear-skip")) linear_skip = true;
-    else if (!std::strcmp(a, "--loss-curve") && v) curve = argv[++i];
-    else if (!std::strcmp(a, "--device") && v) {
-      device = argv[++i];
-      if (device != "cpu" && device != "vulkan" && device != "auto") {
-        std::fprintf(stderr, "gat train: --device expects cpu, vulkan or auto, got '%s'\n", device.c_str());
-        return 2;
-      }
-    }
-    else if (!std::strcmp(a, "--task") && v) {
-      task = argv[++i];
-      if (task != "weights" && task != "displacement") {
-        std::fprintf(stderr, "gat train: --task expects 'weights' or 'displacement', got '%s'\n", task.c_str());
-        return 2;
-      }
-    }
-    else if (!std::strcmp(a, "--loss") && v) {
-      loss = argv[++i];
-      if (loss != "mse" && loss != "l1") {
-        std::fprintf(stderr, "gat train: --loss expects 'mse' or 'l1', got '%s'\n", loss.c_str());
-        return 2;
-      }
-    }
-    else if (!std::strcmp(a, "--epochs") && v) { if (!parse_long(a, argv[++i], 1, 10000000, epochs)) return 2; }
-    else if (!std::strcmp(a, "--seed") && v) { if (!parse_long(a, argv[++i], 0, 2147483647L, seed)) return 2; }
-    else if (!std::strcmp(a, "--threads") && v) { if (!parse_long(a, argv[++i], 1, 1024, threads)) return 2; }
-    else if (!std::strcmp(a, "--batch") && v) { if (!parse_long(a, argv[++i], 1, 4096, batch)) return 2; }
-    else if (!std::strcmp(a, "--samples") && v) { if (!parse_long(a, argv[++i], 1, 1000000, samples)) return 2; samples_set = true; }
-    else if (!std::strcmp(a, "--sample-vertices") && v) { if (!parse_long(a, argv[++i], 1, 100000000, sample_vertices)) return 2; }
-    else if (!std::strcmp(a, "--val-every") && v) { if (!parse_long(a, argv[++i], 1, 1000000, val_every)) return 2; }
-    else if (!std::strcmp(a, "--minutes") && v) {
-      char* end = nullptr;
-      minutes = std::strtod(argv[++i], &end);
-      if (*end || !(minutes > 0) || !std::isfinite(minutes)) {
-        std::fprintf(stderr, "gat train: --minutes expects a positive number, got '%s'\n", argv[i]);
-        return 2;
-      }
-    }
-    else if (!std::strcmp(a, "--lr") && v) {
-      char* end = nullptr;
-      lr = std::strtof(argv[++i], &end);
-      if (*end || !(lr > 0.f) || !std::isfinite(lr)) {
-        std::fprintf(stderr, "gat train: --lr expects a positive number, got '%s'\n", argv[i]);
-        return 2;
-      }
-    } else {
-      std::fprintf(stderr, "gat train: unknown or incomplete option '%s'\n", a);
-      return usage(2);
-    }
-  }
-  if (threads > 0) omp_set_num_threads(int(threads));
+gat::Runner gat::setup_train(CLI::App& gat) {
+  auto a = std::make_shared<TrainArgs>();
+  CLI::App& c = add_command(gat, "train", "train a model by name (densegats, neuroskinning, ...)");
+  set_details(c, "Trains a model and writes a resumable checkpoint (safetensors + metadata) after every epoch.\n"
+                "Ctrl-C stops after the current epoch's checkpoint is written.");
+  c.add_option("--model", a->model_name,
+               "densegats (default), densegats-noself, densegats-nodense, origat, neuroskinning, "
+               "neuroskinning-nopool, fc, pointnet; paper settings");
+  c.add_option("--task", a->task,
+               "weights or displacement (default: the model's paper task; e.g. --model neuroskinning --task "
+               "displacement is DenseGATs' comparison)")
+      ->check(one_of({"weights", "displacement"}));
+  c.add_option("--loss", a->loss,
+               "displacement loss: mse (default, the paper) or l1 (mean absolute error: keeps LBS where unsure; "
+               "closer to the mean vertex error gat eval reports)")
+      ->check(one_of({"mse", "l1"}));
+  c.add_flag("--linear-skip", a->linear_skip,
+             "densegats family: add a per-vertex linear map of the input columns to the output, set to the "
+             "least-squares fit of the training targets before the first epoch (the graph network learns the "
+             "residual; recorded in the checkpoint's configuration; not the paper's architecture)");
+  add_out(c, a->out, "checkpoint path")->capture_default_str();
+  c.add_option("--epochs", a->epochs, "epochs to train, in total when resuming")
+      ->check(int_in(1, 10000000))->capture_default_str();
+  c.add_option("--resume", a->resume,
+               "continue from a checkpoint written by gat train (model, data, seed and batch size from the file)");
+  add_seed(c, a->seed, "initialisation, sampling and data seed");
+  add_threads(c, a->common);
+  c.add_option("--batch", a->batch, "characters per batch (default: paper, 8 or 12)")->check(int_in(1, 4096));
+  c.add_option("--lr", a->lr, "initial learning rate")->check(positive_number())->capture_default_str();
+  c.add_option("--minutes", a->minutes,
+               "time budget: no new epoch starts once M minutes of training have passed (the epoch running then "
+               "finishes; --epochs still caps it)")
+      ->check(positive_number());
+  c.add_option("--samples", a->samples,
+               "training samples of the embedded data (default 64; 8 more validate); with --data: poses per "
+               "character and epoch (default: all of the dataset's)")
+      ->check(int_in(1, 1000000));
+  c.add_option("--data", a->data,
+               "a dataset written by gat dataset build: trains on its training characters, validates on its "
+               "validation characters (bones: the dataset's super skeleton)");
+  add_device(c, a->common);
+  c.add_option("--loss-curve", a->curve,
+               "the loss curve picture, rewritten after every epoch (default: the checkpoint's path with .loss.png "
+               "for its extension); the losses also go to its .csv");
+  c.add_option("--val-every", a->val_every, "validate every K-th epoch and after the last one")
+      ->check(int_in(1, 1000000))->capture_default_str();
+  c.add_option("--sample-vertices", a->sample_vertices, "vertices per training sample (default: paper, 1000 or 2048)")
+      ->check(int_in(1, 100000000));
+  add_quiet(c, a->common);
+  c.footer("Without --data the embedded tube character is used: displacement models learn the correction of LBS in "
+           "random bend/twist poses; skin-weight models learn the two-bone weights of tubes of varying resolution.");
+  return [a, &c] {
+    TrainArgs args = *a;
+    if (!c.count("--samples")) args.samples = -1;  // not given: the source's default
+    return run_train(std::move(args));
+  };
+}
+
+namespace {
+
+int run_train(TrainArgs a) {
+  std::string model_name = a.model_name, out = a.out, resume = a.resume, data = a.data, task = a.task,
+              curve = a.curve, loss = a.loss;
+  long epochs = a.epochs, seed = a.seed, batch = a.batch, samples = a.samples < 0 ? 64 : a.samples;
+  const bool samples_set = a.samples >= 0;
+  const float lr = a.lr;
+  const double minutes = a.minutes;
+  long val_every = a.val_every, sample_vertices = a.sample_vertices;
+  const bool quiet = a.common.quiet;
+  const bool linear_skip = a.linear_skip;
+  gat::apply_threads(a.common);
   if (curve.empty()) curve = gatcore::character::default_curve_path(out);
   // Before any training: a curve that cannot be written would stop the run.
   if (const auto dir = std::filesystem::path(curve).parent_path(); !dir.empty() && !std::filesystem::is_directory(dir)) {
@@ -195,7 +148,7 @@ int gat::cmd_train(int argc, char** argv) {
                  dir.string().c_str());
     return 2;
   }
-  const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
+  const Device dev = gat::device_from_flag(a.common.device, "train");
 
   std::unique_ptr<Model> model;
   Normaliser norm;
@@ -294,8 +247,9 @@ int gat::cmd_train(int argc, char** argv) {
   if (resume.empty()) norm = Normaliser::fit(train, cfg.task == Task::displacement);
   if (resume.empty() && cfg.linear_skip) {
     const LinearMap f = fit_linear_skip(*model, train, norm);
-    std::printf("linear skip: least-squares fit on %lld training vertices, MSE %.6f (predicting zero: %.6f)\n",
-                static_cast<long long>(f.rows), f.mse_after, f.mse_before);
+    if (!quiet)
+      std::printf("linear skip: least-squares fit on %lld training vertices, MSE %.6f (predicting zero: %.6f)\n",
+                  static_cast<long long>(f.rows), f.mse_after, f.mse_before);
   }
   TrainOptions opt = TrainOptions::defaults_for(cfg);
   opt.seed = std::uint64_t(seed);
@@ -360,7 +314,7 @@ int gat::cmd_train(int argc, char** argv) {
     if (root) std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
     return 0;
   }
-  const bool tty = root && isatty(fileno(stderr));
+  const bool tty = root && gat::Progress::enabled(quiet);
   std::signal(SIGINT, on_sigint);
   if (tty) std::fprintf(stderr, "(Ctrl-C stops after the current epoch's checkpoint; twice quits at once)\n");
   const auto t0 = std::chrono::steady_clock::now();
@@ -387,7 +341,7 @@ int gat::cmd_train(int argc, char** argv) {
       const double eta = done > 0 ? tot / done * (double(epochs - first) - done) : 0;
       std::fprintf(stderr, "\repoch %d/%ld  batch %lld/%lld  loss %.5f  lr %.3g  %.1f samples/s  ETA %s ", e, epochs,
                    static_cast<long long>(b), static_cast<long long>(nb), loss, trainer.optimiser().lr(), sps,
-                   hms(eta).c_str());
+                   gat::hms(eta).c_str());
       std::fflush(stderr);
     };
     const bool last = trainer.epoch() + 1 >= epochs;
@@ -402,10 +356,11 @@ int gat::cmd_train(int argc, char** argv) {
     if (tty) std::fprintf(stderr, "\r\033[K");
     char val_text[32] = "-";
     if (st.val_loss >= 0) std::snprintf(val_text, sizeof val_text, "%.6f", st.val_loss);
-    if (root) std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
+    if (root && !quiet)
+      std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
                 epochs, st.train_loss, val_text, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
                 out.c_str());
-    if (root && comm.size() > 1)
+    if (root && !quiet && comm.size() > 1)
       std::printf("  rank 0: %.0f steps, %.3f MB sent per step, %.2f s in collectives\n", double(st.batches),
                   st.comm_bytes / 1e6 / double(std::max<std::int64_t>(st.batches, 1)), st.comm_seconds);
     std::fflush(stdout);
@@ -415,7 +370,7 @@ int gat::cmd_train(int argc, char** argv) {
     comm.broadcast(stop, sizeof stop, 0);
     if (stop[0]) {
       if (root) std::printf("time budget of %g minutes reached after epoch %d (%s); model written to %s\n", minutes, st.epoch,
-                  hms(trained_s).c_str(), out.c_str());
+                  gat::hms(trained_s).c_str(), out.c_str());
       return 0;
     }
     if (stop[1]) {
@@ -426,7 +381,9 @@ int gat::cmd_train(int argc, char** argv) {
   }
   if (root)
     std::printf("trained %ld epochs in %s; model written to %s, loss curve to %s (+ %s)\n", epochs - first,
-              hms(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()).c_str(), out.c_str(),
+              gat::hms(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()).c_str(), out.c_str(),
               curve.c_str(), gatcore::character::history_csv_path(curve).c_str());
   return 0;
 }
+
+}  // namespace

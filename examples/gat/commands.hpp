@@ -1,27 +1,21 @@
 #pragma once
-// The `gat` tool's subcommands: one file per command (cmd_<name>.cpp), each
-// a function taking the arguments after the command name. Adding a command is
-// one declaration here and one row in kCommands (main.cpp).
+// The `gat` tool's subcommands: one file per command (cmd_<name>.cpp), each a
+// setup function that adds the command and its options to the `gat` app
+// (cli_options.hpp) and returns what runs it. Adding a command is one
+// declaration here and one row in kCommands (main.cpp). Commands throw
+// gatcore::Error for bad input; main prints it on one line and exits 1.
+#include "cli_options.hpp"
+
 namespace gat {
 
-// argv[0] is the command name; returns the process exit code. Commands throw
-// gatcore::Error for bad input; main prints it and exits 1.
-using CommandFn = int (*)(int argc, char** argv);
-
-struct Command {
-  const char* name;
-  CommandFn run;
-  const char* summary;
-};
-
-int cmd_demo(int argc, char** argv);
-int cmd_train(int argc, char** argv);
-int cmd_eval(int argc, char** argv);
-int cmd_info(int argc, char** argv);
-int cmd_errormap(int argc, char** argv);
-int cmd_dataset(int argc, char** argv);
-int cmd_predict_weights(int argc, char** argv);
-int cmd_deform(int argc, char** argv);
-int cmd_distill(int argc, char** argv);
+Runner setup_demo(CLI::App& gat);
+Runner setup_train(CLI::App& gat);
+Runner setup_eval(CLI::App& gat);
+Runner setup_info(CLI::App& gat);
+Runner setup_errormap(CLI::App& gat);
+Runner setup_dataset(CLI::App& gat);
+Runner setup_predict_weights(CLI::App& gat);
+Runner setup_deform(CLI::App& gat);
+Runner setup_distill(CLI::App& gat);
 
 }  // namespace gat

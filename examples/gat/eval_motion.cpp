@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -27,6 +26,7 @@
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/linear_skip.hpp"
+#include "progress.hpp"
 
 using namespace gatcore;
 using namespace gatcore::character;
@@ -34,34 +34,6 @@ using namespace gatcore::models;
 namespace fs = std::filesystem;
 
 namespace {
-
-int usage(int rc) {
-  std::fprintf(rc ? stderr : stdout,
-               "usage: gat eval --motion M.bvh [--motion ...] | --targets  --data DATASET [--model [LABEL=]FILE ...]\n"
-               "                [--part test|validation|train] [--stride K] [--json OUT] [--markdown OUT]\n"
-               "                [--errormaps DIR] [--errormap-frames N] [--errormap-size PX]\n"
-               "                [--loss-curve LABEL=TRAIN_LOG ...] [--cm-per-unit X] [--linear-probe]\n"
-               "  Evaluates displacement models (LBS + predicted offsets) and the LBS and DQS baselines\n"
-               "  against the dataset's reference deformer (Delta Mush or ARAP on LBS) on every K-th frame\n"
-               "  (default 1: all frames) of each motion retargeted onto each character of the part:\n"
-               "  per-vertex distance mean / p99 / max / min per character and motion, per character, overall.\n"
-               "  Characters with file targets (gat dataset build --target) are evaluated on their frames\n"
-               "  instead (gat eval --targets --data D: no --motion needed).\n"
-               "  --max-limit-excess DEG  leaves out frames whose pose leaves the dataset's random-pose joint\n"
-               "                   limits (what training covered) by more than DEG degrees on some joint axis\n"
-               "                   (rig/joint_limits.hpp pose_limit_excess; counted as frames_excluded)\n"
-               "  --linear-probe   also evaluates the least-squares linear map of the models' input columns\n"
-               "                   to the target, fitted on the training characters' epoch-0 poses (the\n"
-               "                   linear probe a network has to beat; gat train --linear-skip starts there)\n"
-               "  --cm-per-unit X  centimetres per world unit (default: 100 for glTF files, whose unit is the\n"
-               "                   metre; unknown for other sources unless given)\n"
-               "  --errormaps DIR  per-vertex error colour maps (PNG) of N frames (default 2) of the first\n"
-               "                   motion per character and method, one colour scale per frame: blue 0, red\n"
-               "                   the 99th percentile of LBS's error in that frame (in the JSON) and above\n"
-               "  --loss-curve LABEL=LOG  plots the train / validation loss per epoch of a `gat train` log\n"
-               "                   (its 'epoch N/M  train loss X  val loss Y' lines) to DIR/loss_LABEL.png\n");
-  return rc;
-}
 
 // Mean / max / min and a log-spaced histogram for percentiles: 4096 bins
 // from 1e-8 to 1e2 units (each bin 0.56 % wide; errors outside land in the
@@ -137,76 +109,23 @@ std::vector<std::vector<float>> read_losses(const std::string& path) {
 
 }  // namespace
 
-int gat::eval_motion(int argc, char** argv) {
-  std::string data, part = "test", json_out, md_out, map_dir;
-  std::vector<std::string> motion_paths, loss_curves;
+int gat::eval_motion(const EvalMotionArgs& args) {
+  const std::string data = args.data, part = args.part, json_out = args.json, md_out = args.markdown,
+                    map_dir = args.errormaps;
+  const std::vector<std::string>& motion_paths = args.motions;
+  const std::vector<std::string>& loss_curves = args.loss_curves;
   std::vector<std::pair<std::string, std::string>> model_args;  // label, file
-  long stride = 1, map_frames = 2, map_size = 320;
-  double cm_per_unit = -1;
-  bool linear_probe = false;
-  double max_excess_deg = -1;  // < 0: every frame
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-h" || a == "--help") return usage(0);
-    if (a == "--linear-probe") {
-      linear_probe = true;
-      continue;
-    }
-    if (a == "--targets") continue;  // file targets are evaluated whenever a character has them
-    if (i + 1 >= argc) {
-      std::fprintf(stderr, "gat eval: unknown or incomplete option '%s'\n", a.c_str());
-      return usage(2);
-    }
-    const std::string v = argv[++i];
-    auto integer = [&](long lo, long hi) {
-      char* end = nullptr;
-      const long x = std::strtol(v.c_str(), &end, 10);
-      if (v.empty() || *end || x < lo || x > hi)
-        throw InvalidArgument(detail::cat("gat eval: ", a, " expects an integer in [", lo, ", ", hi, "], got '", v, "'"));
-      return x;
-    };
-    if (a == "--motion") motion_paths.push_back(v);
-    else if (a == "--data") data = v;
-    else if (a == "--part") part = v;
-    else if (a == "--model") {
-      const auto eq = v.find('=');
-      model_args.emplace_back(eq == std::string::npos ? std::string() : v.substr(0, eq),
-                              eq == std::string::npos ? v : v.substr(eq + 1));
-    } else if (a == "--stride") stride = integer(1, 1000000);
-    else if (a == "--max-limit-excess") {
-      char* end = nullptr;
-      max_excess_deg = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end || !(max_excess_deg >= 0) || !std::isfinite(max_excess_deg))
-        throw InvalidArgument("gat eval: --max-limit-excess expects degrees >= 0, got '" + v + "'");
-    }
-    else if (a == "--json") json_out = v;
-    else if (a == "--markdown") md_out = v;
-    else if (a == "--errormaps") map_dir = v;
-    else if (a == "--errormap-frames") map_frames = integer(0, 1000);
-    else if (a == "--errormap-size") map_size = integer(32, 4096);
-    else if (a == "--loss-curve") loss_curves.push_back(v);
-    else if (a == "--cm-per-unit") {
-      char* end = nullptr;
-      cm_per_unit = std::strtod(v.c_str(), &end);
-      if (*end || !(cm_per_unit > 0) || !std::isfinite(cm_per_unit))
-        throw InvalidArgument("gat eval: --cm-per-unit expects a positive number, got '" + v + "'");
-    } else {
-      std::fprintf(stderr, "gat eval: unknown option '%s'\n", a.c_str());
-      return usage(2);
-    }
+  const bool linear_probe = args.linear_probe;
+  const double max_excess_deg = args.max_limit_excess_deg;  // < 0: every frame
+  for (const std::string& v : args.models) {
+    const auto eq = v.find('=');
+    model_args.emplace_back(eq == std::string::npos ? std::string() : v.substr(0, eq),
+                            eq == std::string::npos ? v : v.substr(eq + 1));
   }
-  if (data.empty()) {
-    std::fprintf(stderr, "gat eval: --motion needs --data DATASET\n");
-    return usage(2);
-  }
-  if (part != "test" && part != "validation" && part != "train") {
-    std::fprintf(stderr, "gat eval: --part expects test, validation or train, got '%s'\n", part.c_str());
-    return 2;
-  }
-  if (!loss_curves.empty() && map_dir.empty()) {
-    std::fprintf(stderr, "gat eval: --loss-curve writes into the --errormaps DIR; give one\n");
-    return 2;
-  }
+  const long stride = args.stride, map_frames = args.errormap_frames, map_size = args.errormap_size;
+  const double cm_per_unit = args.cm_per_unit;
+  GATCORE_CHECK(!data.empty(), "--motion / --targets need --data DATASET");
+  GATCORE_CHECK(loss_curves.empty() || !map_dir.empty(), "--loss-curve writes into the --errormaps DIR; give one");
   const auto t0 = std::chrono::steady_clock::now();
   const TrainingData td = load_training_data(data);
   const std::string bones = joined_bone_names(td.super);
@@ -218,14 +137,14 @@ int gat::eval_motion(int argc, char** argv) {
   for (auto& [label, file] : model_args) {
     M m{label, file, load_checkpoint(file)};
     const ModelConfig& cfg = m.l.model->config();
-    GATCORE_CHECK(cfg.task == Task::displacement, "gat eval: ", file, ": model '", cfg.name,
+    GATCORE_CHECK(cfg.task == Task::displacement, file, ": model '", cfg.name,
                   "' predicts skin weights; --motion evaluates displacement models");
-    GATCORE_CHECK(cfg.in_dim == td.feature_dim(Task::displacement), "gat eval: ", file, " takes ", cfg.in_dim,
+    GATCORE_CHECK(cfg.in_dim == td.feature_dim(Task::displacement), file, " takes ", cfg.in_dim,
                   " features; ", data, " has ", td.feature_dim(Task::displacement), " (distortion scales: ",
                   format_distortion_scales(td.description.distortion_scales), ")");
     const auto& md = m.l.file.metadata;
     if (md.count("skeleton") && md.at("skeleton") != bones)
-      throw InvalidArgument(detail::cat("gat eval: ", file, ": trained on a super skeleton (", md.at("skeleton"),
+      throw InvalidArgument(detail::cat(file, ": trained on a super skeleton (", md.at("skeleton"),
                                         ") that differs from ", data, "'s (", bones, ")"));
     if (m.label.empty()) m.label = cfg.name;
     m.l.model->fold_batch_norm();
@@ -235,7 +154,7 @@ int gat::eval_motion(int argc, char** argv) {
   for (const auto& p : motion_paths) motions.push_back(load_bvh(p));
   const auto dpart = part == "test" ? DatasetPart::test : part == "validation" ? DatasetPart::validation : DatasetPart::train;
   const auto& chars = td.part(dpart);
-  GATCORE_CHECK(!chars.empty(), "gat eval: ", data, " has no ", part, " characters");
+  GATCORE_CHECK(!chars.empty(), data, " has no ", part, " characters");
 
   std::vector<std::string> methods = {"LBS", "DQS"};
   for (const auto& m : models_) methods.push_back(m.label);
@@ -268,6 +187,11 @@ int gat::eval_motion(int argc, char** argv) {
     std::int64_t excluded = 0;  // frames left out (--max-limit-excess)
   };
   std::vector<Row> table, per_char;
+  std::int64_t total_frames = 0, done_frames = 0;
+  for (const Motion& mo : motions)
+    total_frames += std::int64_t((mo.clip.frames.size() + std::size_t(stride) - 1) / std::size_t(stride));
+  gat::Progress progress("evaluating " + part + " characters", total_frames * std::int64_t(chars.size()), "frames",
+                         args.quiet);
   for (std::int32_t c : chars) {
     const PreparedCharacter& pc = td.characters[std::size_t(c)];
     const std::string& entry = td.description.characters[std::size_t(c)];
@@ -309,6 +233,7 @@ int gat::eval_motion(int argc, char** argv) {
           map_at.push_back(frames[std::size_t((2 * k + 1) * frames.size() / std::size_t(2 * map_frames))]);
       const auto tc = std::chrono::steady_clock::now();
       for (std::size_t f : frames) {
+        progress.update(done_frames++, character_label(entry));
         const Pose& pose = clip.frames[f];
         if (max_excess_deg >= 0 &&
             pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits).radians > max_excess_deg * std::numbers::pi / 180.0) {
@@ -380,13 +305,16 @@ int gat::eval_motion(int argc, char** argv) {
           }
         }
       }
-      std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%lld outside the limits left out, %.1f s):",
-                  row.character.c_str(), stem(row.motion).c_str(), static_cast<long long>(row.frames),
-                  static_cast<long long>(n), static_cast<long long>(row.excluded),
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
-      for (std::size_t k = 0; k < K; ++k) std::printf("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
-      std::printf("\n");
-      std::fflush(stdout);
+      if (!args.quiet) {
+        progress.finish();
+        std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%lld outside the limits left out, %.1f s):",
+                    row.character.c_str(), stem(row.motion).c_str(), static_cast<long long>(row.frames),
+                    static_cast<long long>(n), static_cast<long long>(row.excluded),
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
+        for (std::size_t k = 0; k < K; ++k) std::printf("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
+        std::printf("\n");
+        std::fflush(stdout);
+      }
       for (std::size_t k = 0; k < K; ++k) chrow.acc[k].add(row.acc[k]);
       chrow.frames += row.frames;
       chrow.excluded += row.excluded;
@@ -400,9 +328,10 @@ int gat::eval_motion(int argc, char** argv) {
     }
     per_char.push_back(chrow);
   }
+  progress.finish();
   for (const auto& lc : loss_curves) {
     const auto eq = lc.find('=');
-    GATCORE_CHECK(eq != std::string::npos && eq > 0, "gat eval: --loss-curve expects LABEL=LOG, got '", lc, "'");
+    GATCORE_CHECK(eq != std::string::npos && eq > 0, "--loss-curve expects LABEL=LOG, got '", lc, "'");
     const auto series = read_losses(lc.substr(eq + 1));
     const std::string png = (fs::path(map_dir) / ("loss_" + lc.substr(0, eq) + ".png")).string();
     write_png(png, plot_curves(series, 480, 300, true));

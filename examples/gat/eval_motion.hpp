@@ -1,9 +1,26 @@
 #pragma once
 // `gat eval --motion M.bvh ...`: DenseGATs-style evaluation of displacement
 // models and the LBS / DQS baselines against the dataset's reference deformer
-// (Delta Mush on LBS), over every frame of retargeted test motions on the
+// (Delta Mush / ARAP on LBS, or the characters' file targets), over every frame of retargeted test motions on the
 // dataset's test characters; Markdown / JSON tables, error colour maps and
-// loss curves. Called by cmd_eval when --motion is given.
+// loss curves. Called by gat eval (cmd_eval.cpp, which declares the options)
+// when --motion is given.
+#include <string>
+#include <vector>
+
 namespace gat {
-int eval_motion(int argc, char** argv);
-}
+
+struct EvalMotionArgs {
+  std::vector<std::string> motions, models, loss_curves;  // models: [LABEL=]FILE
+  std::string data, part = "test", json, markdown, errormaps;
+  long stride = 1, errormap_frames = 2, errormap_size = 320;
+  double cm_per_unit = -1;  // unknown: from the file type
+  double max_limit_excess_deg = -1;  // < 0: every frame; else frames further outside the joint limits are left out
+  bool linear_probe = false;         // also the least-squares linear map of the input columns (the probe)
+  bool targets = false;              // the characters' file targets (no --motion needed)
+  bool quiet = false;
+};
+
+int eval_motion(const EvalMotionArgs& args);
+
+}  // namespace gat

@@ -1,55 +1,149 @@
-// `gat` — gatcore's command-line tool: `gat <command> [options]`.
+// `gat` — gatcore's command-line tool: `gat <command> [options]`. Options are
+// declared per command with CLI11 (cli_options.hpp); this file registers the
+// commands, `gat help [CMD]`, `gat --version`, and turns every error into one
+// line naming the command and what went wrong.
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
+#include <iostream>
+#include <new>
 #include <string>
+#include <system_error>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
+#include "gat_version.hpp"
 #include "gatcore/dist/communicator.hpp"
+#include "gatcore/error.hpp"
+#include "gatcore/vulkan.hpp"
+#include "kernels/simd.hpp"
+#include "progress.hpp"
 
 namespace {
 
 constexpr gat::Command kCommands[] = {
-    {"demo", gat::cmd_demo, "train a small DenseGATs on the embedded tube character, compare with LBS"},
-    {"train", gat::cmd_train, "train a model by name (densegats, neuroskinning, ...)"},
-    {"eval", gat::cmd_eval, "evaluate a checkpoint"},
-    {"info", gat::cmd_info, "print what a character (.glb/.gltf/.fbx/.dae), motion (.bvh) or dataset (.json) holds"},
-    {"errormap", gat::cmd_errormap, "render where LBS departs from the reference deformer (Delta Mush) as a PNG"},
-    {"dataset", gat::cmd_dataset, "build a dataset description (characters, motions, split, reference deformer)"},
-    {"predict-weights", gat::cmd_predict_weights, "skin weights for a character from a NeuroSkinning-family model"},
-    {"deform", gat::cmd_deform, "a motion on a character with DenseGATs corrections, baked as morph targets / .pc2"},
-    {"distill", gat::cmd_distill, "train a compact deploy model (e.g. origat) to imitate a large displacement model"},
+    {"demo", gat::setup_demo},
+    {"train", gat::setup_train},
+    {"eval", gat::setup_eval},
+    {"info", gat::setup_info},
+    {"errormap", gat::setup_errormap},
+    {"dataset", gat::setup_dataset},
+    {"predict-weights", gat::setup_predict_weights},
+    {"deform", gat::setup_deform},
+    {"distill", gat::setup_distill},
 };
 
-int usage(int rc) {
-  std::FILE* out = rc ? stderr : stdout;
-  std::fprintf(out, "usage: gat <command> [options]   (gat <command> --help for its options)\n\ncommands:\n");
-  for (const auto& c : kCommands) std::fprintf(out, "  %-16s %s\n", c.name, c.summary);
-  return rc;
+std::string version_text() {
+  std::string s = "gat (gatcore) " GATCORE_VERSION ", git " GAT_GIT_HASH "\n";
+  s += std::string("CPU kernels: SIMD ") + gatcore::cpu::simd_level_name(gatcore::cpu::simd_level()) +
+       " (the CPU supports " + gatcore::cpu::simd_level_name(gatcore::cpu::detected_simd_level()) + ")\n";
+  if (!gatcore::vulkan::compiled()) return s + "Vulkan: not in this build\n";
+  const auto devices = gatcore::vulkan::list_devices();
+  if (devices.empty()) return s + "Vulkan: no device found\n";
+  s += "Vulkan devices:";
+  for (const auto& d : devices) s += "\n  " + std::to_string(d.index) + ": " + d.name + " (" + d.type + ")";
+  return s + "\n";
+}
+
+// "while predicting skin weights" when a command said what it was doing.
+std::string during() {
+  const std::string& a = gat::current_activity();
+  return a.empty() ? std::string() : " while " + a;
+}
+
+// Standard-library exceptions carry terse names ("stof", "std::bad_alloc");
+// say in words what failed. gatcore's own errors already name file and value.
+std::string describe(const std::exception& e) {
+  const std::string what = e.what();
+  if (dynamic_cast<const gatcore::Error*>(&e)) return what;
+  if (dynamic_cast<const std::bad_alloc*>(&e))
+    return "out of memory" + during() + " (use smaller inputs, fewer --samples / --batch, or more memory)";
+  if (dynamic_cast<const std::filesystem::filesystem_error*>(&e)) return "file system error" + during() + ": " + what;
+  if (dynamic_cast<const std::system_error*>(&e)) return "system error" + during() + ": " + what;
+  const bool number = what.rfind("sto", 0) == 0;  // std::stoi / stof / stol ... name themselves
+  if (number && dynamic_cast<const std::invalid_argument*>(&e))
+    return "a value that should be a number is not one" + during() + " (std::" + what + ")";
+  if (number && dynamic_cast<const std::out_of_range*>(&e))
+    return "a number is out of range" + during() + " (std::" + what + ")";
+  return "unexpected error" + during() + ": " + what + " (please report this with the command line)";
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) return usage(2);
-  if (!std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help")) return usage(0);
+  CLI::App app("gatcore's command-line tool: skin weights and corrective deformation with graph-attention "
+               "networks", "gat");
+  app.require_subcommand(0, 1);
+  app.set_help_flag("-h,--help", "print this help (gat help CMD, gat CMD --help: a command's options)");
+  app.set_version_flag("--version", version_text, "print the version, git hash, SIMD level and Vulkan devices");
+  app.footer("Run `gat help CMD` (or `gat CMD --help`) for a command's options.");
+  app.formatter(gat::help_formatter());
+  std::vector<std::pair<CLI::App*, gat::Runner>> runners;
   for (const auto& c : kCommands) {
-    if (std::strcmp(argv[1], c.name)) continue;
+    gat::Runner r = c.setup(app);
+    runners.emplace_back(app.get_subcommand(c.name), std::move(r));
+  }
+  std::string help_topic;
+  CLI::App* help = app.add_subcommand("help", "print the help of a command (gat help CMD) or this list");
+  help->add_option("command", help_topic, "a command's name");
+
+  const auto fail = [&](const std::string& who, const std::string& msg) {
+    std::fprintf(stderr, "%s: %s\n", who.c_str(), msg.c_str());
+  };
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One line naming the command and the argument; the command's help is
+    // one `gat help CMD` away.
+    const auto subs = app.get_subcommands();
+    // Nested (gat dataset build): the full command path.
+    std::string path = "gat";
+    for (const CLI::App* s = subs.empty() ? nullptr : subs.front(); s;) {
+      path += " " + s->get_name();
+      const auto inner = s->get_subcommands();
+      s = inner.empty() ? nullptr : inner.front();
+    }
+    fail(path, std::string(e.what()) + " (see gat help " + (subs.empty() ? "" : subs.front()->get_name()) + ")");
+    return e.get_exit_code() ? 2 : 0;
+  }
+  if (help->parsed()) {
+    if (help_topic.empty()) {
+      // app.help() would print the selected subcommand's (help's own) help.
+      std::cout << app.get_formatter()->make_help(&app, "gat", CLI::AppFormatMode::Normal);
+      return 0;
+    }
+    for (auto& [cmd, run] : runners)
+      if (cmd->get_name() == help_topic) {
+        std::cout << cmd->help();
+        return 0;
+      }
+    fail("gat help", "unknown command '" + help_topic + "'");
+    return 2;
+  }
+  for (auto& [cmd, run] : runners) {
+    if (!cmd->parsed()) continue;
+    std::string path = "gat " + cmd->get_name();
+    for (const CLI::App* s : cmd->get_subcommands()) path += " " + s->get_name();
     try {
-      return c.run(argc - 1, argv + 1);
+      return run();
     } catch (const std::exception& e) {
       // One of several MPI ranks: end them all (they may be waiting for this
       // one in a collective), naming the rank.
       if (gatcore::dist::launched_by_mpi() && gatcore::dist::world().size() > 1) {
         auto& w = gatcore::dist::world();
-        w.abort("gat " + std::string(c.name) + ": rank " + std::to_string(w.rank()) + " of " +
-                    std::to_string(w.size()) + ": " + e.what() + " (stopping all ranks)",
+        w.abort(path + ": rank " + std::to_string(w.rank()) + " of " + std::to_string(w.size()) + ": " + describe(e) +
+                    " (stopping all ranks)",
                 1);
       }
-      std::fprintf(stderr, "gat %s: %s\n", c.name, e.what());
+      fail(path, describe(e));
       return 1;
     }
   }
-  std::fprintf(stderr, "gat: unknown command '%s'\n", argv[1]);
-  return usage(2);
+  std::cerr << app.help();
+  return 2;
 }

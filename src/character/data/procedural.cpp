@@ -250,7 +250,8 @@ Character procedural_character(const ProceduralOptions& opt) {
   }
   ch.welded_from_file.resize(static_cast<std::size_t>(ch.mesh.num_vertices()));
   for (std::size_t v = 0; v < ch.welded_from_file.size(); ++v) ch.welded_from_file[v] = static_cast<std::int32_t>(v);
-  ch.primitives.push_back({0, 0, 0, 0, ch.mesh.num_vertices()});
+  // The object is named like the mesh node save_gltf_character writes.
+  ch.primitives.push_back({0, 0, 0, ch.name.empty() ? "character" : ch.name, 0, ch.mesh.num_vertices()});
   ch.joint_nodes.assign(static_cast<std::size_t>(sk.num_joints()), -1);
   sk.validate(ch.name.c_str());
   ch.mesh.validate(sk.num_joints(), ch.name.c_str());

@@ -238,7 +238,9 @@ Character load_assimp_character(const std::string& path, const ImportOptions& op
         tris.push_back(static_cast<std::int32_t>(base + face.mIndices[c]));
       }
     }
-    ch.primitives.push_back({static_cast<std::int32_t>(mi), 0, -1, base, static_cast<std::int64_t>(mesh->mNumVertices)});
+    ch.primitives.push_back({static_cast<std::int32_t>(mi), 0, -1,
+                             mesh->mName.length ? mesh->mName.C_Str() : "mesh" + std::to_string(mi), base,
+                             static_cast<std::int64_t>(mesh->mNumVertices)});
   }
   for (std::size_t v = 0; v < infl.size(); ++v)
     if (infl[v].empty()) fail("file vertex ", v, " has no non-zero skin weight");

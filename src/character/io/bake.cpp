@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <cctype>
+#include <limits>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -261,6 +263,82 @@ PointCache read_point_cache(const std::string& path) {
       GATCORE_CHECK(std::isfinite(v[k]), path, ": sample ", s, " point ", k / 3, " holds a non-finite value");
   }
   return pc;
+}
+
+std::vector<ObjectPointCache> object_point_caches(const Character& ch, const BakedFrames& frames, UpAxis up,
+                                                  float start_frame) {
+  GATCORE_CHECK(!frames.positions.empty(), ch.name, ": no frames to write as point caches");
+  std::vector<ObjectPointCache> out;
+  std::map<std::string, std::size_t> index;  // object -> out
+  std::vector<std::vector<const SourcePrimitive*>> prims;
+  for (const SourcePrimitive& sp : ch.primitives) {
+    const std::string key = sp.object.empty() ? "node" + std::to_string(sp.node) : sp.object;
+    const auto [it, fresh] = index.emplace(key + "#" + std::to_string(sp.node), out.size());
+    if (fresh) {
+      out.push_back({key, {}});
+      prims.emplace_back();
+    }
+    prims[it->second].push_back(&sp);
+  }
+  for (std::size_t o = 0; o < out.size(); ++o) {
+    PointCache& pc = out[o].cache;
+    std::int64_t n = 0;
+    for (const SourcePrimitive* sp : prims[o]) n += sp->num_vertices;
+    GATCORE_CHECK(n > 0 && n <= std::numeric_limits<std::int32_t>::max(), ch.name, ": object ", out[o].object, " has ",
+                  n, " vertices");
+    pc.num_points = static_cast<std::int32_t>(n);
+    pc.start_frame = start_frame;
+    pc.sample_rate = 1.0f;
+    for (const std::vector<float>& w : frames.positions) {
+      GATCORE_CHECK(static_cast<std::int64_t>(w.size()) == 3 * ch.mesh.num_vertices(), ch.name, ": a frame has ",
+                    w.size() / 3, " positions for ", ch.mesh.num_vertices(), " vertices");
+      std::vector<float> s;
+      s.reserve(3 * static_cast<std::size_t>(n));
+      for (const SourcePrimitive* sp : prims[o])
+        for (std::int64_t i = 0; i < sp->num_vertices; ++i) {
+          const float* p = &w[3 * static_cast<std::size_t>(ch.welded_from_file[static_cast<std::size_t>(sp->first_vertex + i)])];
+          if (up == UpAxis::z) {
+            s.insert(s.end(), {p[0], -p[2], p[1]});
+          } else {
+            s.insert(s.end(), {p[0], p[1], p[2]});
+          }
+        }
+      pc.samples.push_back(std::move(s));
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> object_point_cache_paths(const std::string& path, const std::vector<ObjectPointCache>& caches) {
+  if (caches.size() == 1) return {path};
+  std::string stem = path;
+  if (stem.size() > 4 && stem.compare(stem.size() - 4, 4, ".pc2") == 0) stem.resize(stem.size() - 4);
+  std::vector<std::string> paths;
+  std::set<std::string> seen;
+  for (std::size_t o = 0; o < caches.size(); ++o) {
+    std::string name = caches[o].object;
+    for (char& c : name)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') c = '_';
+    std::string p = stem + "_" + name + ".pc2";
+    if (!seen.insert(p).second) {
+      p = stem + "_" + name + "_" + std::to_string(o) + ".pc2";
+      seen.insert(p);
+    }
+    paths.push_back(p);
+  }
+  return paths;
+}
+
+std::vector<std::string> write_object_point_caches(const std::string& path, const std::vector<ObjectPointCache>& caches) {
+  const std::vector<std::string> paths = object_point_cache_paths(path, caches);
+  std::size_t written = 0;
+  try {
+    for (; written < caches.size(); ++written) write_point_cache(paths[written], caches[written].cache);
+  } catch (...) {
+    for (std::size_t i = 0; i < written; ++i) std::remove(paths[i].c_str());
+    throw;
+  }
+  return paths;
 }
 
 }  // namespace gatcore::character

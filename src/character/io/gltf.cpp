@@ -285,7 +285,9 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
   std::map<std::string, int> name_count;
   for (int j = 0; j < J; ++j) {
     const int n = node_of_joint[j];
-    std::string name = model.nodes[n].name.empty() ? "node" + std::to_string(n) : model.nodes[n].name;
+    // Unnamed nodes: Blender's name for them (its glTF importer says Node_2), so a
+    // joint is called the same here and there.
+    std::string name = model.nodes[n].name.empty() ? "Node_" + std::to_string(n) : model.nodes[n].name;
     if (name_count[name]++ > 0) name += "#" + std::to_string(n);
     sk.names.push_back(name);
     const int p = node_parent[n];
@@ -402,7 +404,9 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
       } else {
         for (std::size_t t = 1; t + 1 < idx.size(); ++t) tri(idx[0], idx[t], idx[t + 1]);
       }
-      ch.primitives.push_back({node.mesh, static_cast<std::int32_t>(pi), n, base, static_cast<std::int64_t>(nv)});
+      ch.primitives.push_back({node.mesh, static_cast<std::int32_t>(pi), n,
+                               node.name.empty() ? "Node_" + std::to_string(n) : node.name, base,
+                               static_cast<std::int64_t>(nv)});
     }
   }
   if (ch.primitives.empty()) rd.fail("no skinned mesh: no node has both a mesh with triangles and a skin");

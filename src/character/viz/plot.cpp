@@ -201,14 +201,29 @@ Image plot_series(const std::vector<PlotSeries>& series, const PlotOptions& opt)
       px = x, py = y, have = true;
     }
   }
-  // Legend, top right, on a white box over the curves.
+  // Legend on a white box, in the corner of the plot where it hides the
+  // fewest curve pixels (top right unless a curve ends there: a validation
+  // curve that ends high stays visible).
   int wmax = 0;
   for (const PlotSeries& o : series) wmax = std::max(wmax, text_width(o.name));
-  const int lx = R - 8 - wmax - 22;
+  const int box_w = wmax + 30, box_h = 12 * static_cast<int>(series.size()) + 4;
+  const int corners[4][2] = {{R - 4 - box_w, T + 3}, {L + 4, T + 3}, {R - 4 - box_w, B - 3 - box_h}, {L + 4, B - 3 - box_h}};
+  int best = 0;
+  long best_hidden = -1;
+  for (int k = 0; k < 4; ++k) {
+    long hidden = 0;
+    for (int yy = corners[k][1]; yy < corners[k][1] + box_h; ++yy)
+      for (int xx = corners[k][0]; xx < corners[k][0] + box_w; ++xx) {
+        if (xx < 0 || yy < 0 || xx >= img.width || yy >= img.height) continue;
+        for (std::size_t c = 0; c < series.size(); ++c) hidden += img.at(xx, yy) == colours[c % 4];
+      }
+    if (best_hidden < 0 || hidden < best_hidden) best = k, best_hidden = hidden;
+  }
+  const int bx = corners[best][0], by = corners[best][1];
+  for (int yy = by; yy < by + box_h; ++yy)
+    for (int xx = bx; xx < bx + box_w; ++xx) put(img, xx, yy, {255, 255, 255});
   for (std::size_t k = 0; k < series.size(); ++k) {
-    const int ly = T + 6 + 12 * static_cast<int>(k);
-    for (int yy = ly - 3; yy < ly + 10; ++yy)
-      for (int xx = lx - 4; xx < R - 4; ++xx) put(img, xx, yy, {255, 255, 255});
+    const int lx = bx + 4, ly = by + 3 + 12 * static_cast<int>(k);
     segment(img, float(lx), float(ly + 3), float(lx + 16), float(ly + 3), colours[k % 4], 2);
     draw_text(img, lx + 20, ly, series[k].name, ink);
   }

@@ -1,12 +1,18 @@
 #include "gatcore/character/viz/render.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <string>
 
 #include "gatcore/atomic_file.hpp"
+#include <zlib.h>
+
+#include "gatcore/character/viz/plot.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -89,13 +95,22 @@ Image render_error_map(std::span<const float> positions, std::span<const std::in
   }
   if (!(emax > 0.0f)) emax = 1.0f;
   const int bar = opt.colour_bar ? std::max(8, opt.width / 24) : 0;
+  // The bar's numbers (0, half, the top of the scale) left of it.
+  const auto number = [](float v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3g", static_cast<double>(v));
+    return std::string(b);
+  };
+  const std::string top_label = number(emax) + (opt.max_error > 0.0f ? "+" : "");
+  const int label_w = bar ? std::max(text_width(top_label), text_width(number(0.5f * emax))) + 4 : 0;
+  const int right = bar + label_w;  // reserved on the right
   const float margin = 0.05f;
-  const float avail_w = (opt.width - 2 * bar) * (1 - 2 * margin), avail_h = opt.height * (1 - 2 * margin);
+  const float avail_w = (opt.width - 2 * right) * (1 - 2 * margin), avail_h = opt.height * (1 - 2 * margin);
   const float ext = std::max((hi[0] - lo[0]) / avail_w, (hi[1] - lo[1]) / avail_h);
   const float scale = ext > 0.0f ? 1.0f / ext : 1.0f;
   const float cx = 0.5f * (lo[0] + hi[0]), cy = 0.5f * (lo[1] + hi[1]);
   for (std::int64_t v = 0; v < n; ++v) {
-    sx[v] = 0.5f * (opt.width - bar) + (sx[v] - cx) * scale;
+    sx[v] = 0.5f * (opt.width - right) + (sx[v] - cx) * scale;
     sy[v] = 0.5f * opt.height - (sy[v] - cy) * scale;
   }
   std::vector<float> zbuf(static_cast<std::size_t>(opt.width) * opt.height, std::numeric_limits<float>::infinity());
@@ -134,11 +149,20 @@ Image render_error_map(std::span<const float> positions, std::span<const std::in
         put(img, x, y, col);
       }
   }
-  if (bar)
-    for (int y = opt.height / 10; y < opt.height * 9 / 10; ++y) {
-      const float t = 1.0f - static_cast<float>(y - opt.height / 10) / (opt.height * 8 / 10);
+  if (bar) {
+    const int y0 = opt.height / 10, y1 = opt.height * 9 / 10;
+    for (int y = y0; y < y1; ++y) {
+      const float t = 1.0f - static_cast<float>(y - y0) / static_cast<float>(y1 - y0);
       for (int x = opt.width - bar; x < opt.width - bar / 3; ++x) put(img, x, y, error_colour(t));
     }
+    // Errors above a fixed scale top are clamped to red: "+" says so.
+    const std::array<std::uint8_t, 3> ink{40, 40, 40};
+    const std::string labels[3] = {top_label, number(0.5f * emax), "0"};
+    const int ys[3] = {y0, (y0 + y1) / 2, y1 - 1};
+    for (int k = 0; k < 3; ++k)
+      draw_text(img, opt.width - bar - 3 - text_width(labels[k]), std::clamp(ys[k] - 3, 0, opt.height - 7), labels[k],
+                ink);
+  }
   return img;
 }
 
@@ -222,30 +246,45 @@ void write_png(const std::string& path, const Image& img) {
   GATCORE_CHECK(img.width > 0 && img.height > 0 &&
                     img.rgb.size() == static_cast<std::size_t>(img.width) * img.height * 3,
                 path, ": image of ", img.width, "x", img.height, " with ", img.rgb.size(), " bytes");
-  std::vector<std::uint8_t> raw;
-  raw.reserve(static_cast<std::size_t>(img.height) * (3 * img.width + 1));
+  // Each row gets the PNG filter whose output has the smallest sum of
+  // absolute (signed) bytes, libpng's heuristic, then zlib at level 9: a
+  // loss curve or an error map is mostly flat colour and shrinks 20-200x
+  // (bench/RESULTS.md has the figures).
+  const std::size_t stride = 3 * static_cast<std::size_t>(img.width);
+  std::vector<std::uint8_t> raw(static_cast<std::size_t>(img.height) * (stride + 1));
+  std::vector<std::uint8_t> zero(stride, 0), cand(stride);
   for (int y = 0; y < img.height; ++y) {
-    raw.push_back(0);  // filter: none
-    raw.insert(raw.end(), img.rgb.begin() + 3 * static_cast<std::size_t>(y) * img.width,
-               img.rgb.begin() + 3 * static_cast<std::size_t>(y + 1) * img.width);
+    const std::uint8_t* cur = img.rgb.data() + static_cast<std::size_t>(y) * stride;
+    const std::uint8_t* up = y > 0 ? cur - stride : zero.data();
+    std::uint8_t* out = raw.data() + static_cast<std::size_t>(y) * (stride + 1);
+    std::uint64_t best = ~std::uint64_t{0};
+    for (std::uint8_t filter = 0; filter < 5; ++filter) {
+      std::uint64_t cost = 0;
+      for (std::size_t i = 0; i < stride; ++i) {
+        const int a = i >= 3 ? cur[i - 3] : 0, b = up[i], c = i >= 3 ? up[i - 3] : 0;
+        int pred = 0;
+        if (filter == 1) pred = a;
+        if (filter == 2) pred = b;
+        if (filter == 3) pred = (a + b) / 2;
+        if (filter == 4) {
+          const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+          pred = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+        }
+        cand[i] = static_cast<std::uint8_t>(cur[i] - pred);
+        cost += static_cast<std::uint64_t>(std::abs(static_cast<int>(static_cast<std::int8_t>(cand[i]))));
+      }
+      if (cost < best) {
+        best = cost;
+        out[0] = filter;
+        std::copy(cand.begin(), cand.end(), out + 1);
+      }
+    }
   }
-  std::vector<std::uint8_t> z = {0x78, 0x01};
-  for (std::size_t off = 0; off < raw.size() || off == 0; off += 65535) {
-    const std::size_t len = std::min<std::size_t>(65535, raw.size() - off);
-    z.push_back(off + len >= raw.size() ? 1 : 0);
-    z.push_back(static_cast<std::uint8_t>(len & 0xFF));
-    z.push_back(static_cast<std::uint8_t>(len >> 8));
-    z.push_back(static_cast<std::uint8_t>(~len & 0xFF));
-    z.push_back(static_cast<std::uint8_t>((~len >> 8) & 0xFF));
-    z.insert(z.end(), raw.begin() + off, raw.begin() + off + len);
-    if (raw.empty()) break;
-  }
-  std::uint32_t s1 = 1, s2 = 0;
-  for (std::uint8_t b : raw) {
-    s1 = (s1 + b) % 65521;
-    s2 = (s2 + s1) % 65521;
-  }
-  be32(z, (s2 << 16) | s1);
+  uLongf zlen = compressBound(static_cast<uLong>(raw.size()));
+  std::vector<std::uint8_t> z(zlen);
+  const int zrc = compress2(z.data(), &zlen, raw.data(), static_cast<uLong>(raw.size()), Z_BEST_COMPRESSION);
+  GATCORE_CHECK(zrc == Z_OK, path, ": zlib could not compress the image (", zError(zrc), ")");
+  z.resize(zlen);
   std::vector<std::uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   std::vector<std::uint8_t> ihdr;
   be32(ihdr, static_cast<std::uint32_t>(img.width));

@@ -49,4 +49,28 @@ struct PointCache {
 void write_point_cache(const std::string& path, const PointCache& pc);  // atomic
 PointCache read_point_cache(const std::string& path);  // throws naming the file for bad / truncated files
 
+// The up axis of written points: y keeps the file's frame (glTF, Maya,
+// Houdini); z turns it into Blender's / 3ds Max's, (x, y, z) -> (x, -z, y),
+// what Blender's glTF importer does to a mesh's vertices, so the Mesh Cache
+// modifier needs no axis settings.
+enum class UpAxis { y, z };
+
+// One point cache per object (SourcePrimitive::object) of the character: a
+// DCC tool's Mesh Cache / deformer takes exactly one object's vertices, in
+// the object's order (its primitives' file vertices, concatenated). Points
+// are in the file's mesh frame (for a skinned glTF mesh: its object frame).
+struct ObjectPointCache {
+  std::string object;
+  PointCache cache;
+};
+std::vector<ObjectPointCache> object_point_caches(const Character& ch, const BakedFrames& frames, UpAxis up,
+                                                  float start_frame);
+// Where write_object_point_caches puts them: `path` itself for one object,
+// else <path without .pc2>_<object>.pc2 (characters outside [A-Za-z0-9_.-]
+// become '_'; a clash gets the object's index appended).
+std::vector<std::string> object_point_cache_paths(const std::string& path, const std::vector<ObjectPointCache>& caches);
+// Writes all of them or none (earlier files are removed when one fails);
+// returns the paths.
+std::vector<std::string> write_object_point_caches(const std::string& path, const std::vector<ObjectPointCache>& caches);
+
 }  // namespace gatcore::character

@@ -17,6 +17,9 @@ struct SourcePrimitive {
   std::int32_t mesh = 0;       // glTF mesh index
   std::int32_t primitive = 0;  // primitive index within the mesh
   std::int32_t node = 0;       // node that instantiates it
+  // The object a DCC tool makes of that node: its name, or Blender's for an
+  // unnamed glTF node ("Node_2"). Point caches are written per object.
+  std::string object;
   std::int64_t first_vertex = 0;
   std::int64_t num_vertices = 0;
 };

@@ -1,7 +1,7 @@
 #pragma once
 // Pictures without a GPU: a small z-buffered software rasteriser for
 // per-vertex error colour maps of a posed character (like the papers' error
-// figures), a line plot for loss curves, and a dependency-free PNG writer.
+// figures), a line plot for loss curves, and a PNG writer (zlib).
 #include <array>
 #include <cstdint>
 #include <span>
@@ -41,7 +41,7 @@ Image render_error_map(std::span<const float> positions, std::span<const std::in
 // y on a log scale when `log_y` and all values are positive.
 Image plot_curves(const std::vector<std::vector<float>>& series, int width = 640, int height = 400, bool log_y = true);
 
-// 8-bit RGB PNG (stored deflate blocks: no zlib needed). Throws
+// 8-bit RGB PNG, filtered per row and zlib-compressed. Throws
 // InvalidArgument naming the path if it cannot be written.
 void write_png(const std::string& path, const Image& img);
 
