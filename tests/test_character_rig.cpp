@@ -187,7 +187,7 @@ TEST_CASE("rigs that are not humanoids are refused by name, or get root motion o
                     Contains("beast.bvh") && Contains("not a humanoid") && Contains("BackUpperLeg.L"));
 }
 
-TEST_CASE("--alias overrides the tables and maps what names and structure cannot", "[character][rig]") {
+TEST_CASE("aliases (gat --alias) override the tables and map what names and structure cannot", "[character][rig]") {
   // A quadruped's back legs and front legs named as a humanoid's by hand.
   const Skeleton animal = rigfix::skeleton(rigfix::quadruped());
   BoneAliases a;
