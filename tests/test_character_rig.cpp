@@ -146,6 +146,16 @@ TEST_CASE("a known pose moves every mapped limb, from every convention onto ever
                   << b[0] / dst.units << " " << b[1] / dst.units << " " << b[2] / dst.units);
         for (int k = 0; k < 3; ++k) CHECK(b[k] / dst.units == Approx(a[k] / src.units).margin(0.02));
       }
+      // Root motion: the pelvis travels as the source's did (scaled by hip
+      // heights, which differ by a few percent with and without toes).
+      {
+        const auto tg0 = global_transforms(target, clip.frames[0]);
+        const auto sg0 = global_transforms(motion.skeleton, motion.clip.frames[0]);
+        const Vec3 dt = sub(tpos("pelvis"), mat4_translation(tg0[mt.find("pelvis")]));
+        const Vec3 ds = sub(spos("pelvis"), mat4_translation(sg0[ms.find("pelvis")]));
+        CHECK(dt[0] / dst.units == Approx(ds[0] / src.units).epsilon(0.1));
+        CHECK(dt[2] / dst.units == Approx(ds[2] / src.units).epsilon(0.1));
+      }
       // Fingers move when both sides have them: the left index curls down
       // (its tip drops about 4 cm; 1 cm tolerance).
       if (ms.find("index3.l") >= 0 && mt.find("index3.l") >= 0) {
@@ -187,7 +197,7 @@ TEST_CASE("rigs that are not humanoids are refused by name, or get root motion o
                     Contains("beast.bvh") && Contains("not a humanoid") && Contains("BackUpperLeg.L"));
 }
 
-TEST_CASE("--alias overrides the tables and maps what names and structure cannot", "[character][rig]") {
+TEST_CASE("aliases (gat --alias) override the tables and map what names and structure cannot", "[character][rig]") {
   // A quadruped's back legs and front legs named as a humanoid's by hand.
   const Skeleton animal = rigfix::skeleton(rigfix::quadruped());
   BoneAliases a;

@@ -67,6 +67,17 @@ struct Binding {
   bool by_height = false;                  // scale root motion by whole-skeleton heights (no pelvis pair)
 };
 
+// A binding of J target joints with nothing mapped yet.
+Binding unbound(std::int32_t J) {
+  Binding b;
+  const auto n = static_cast<std::size_t>(J);
+  b.source_of.assign(n, -1);
+  b.aim_t.assign(n, -1);
+  b.aim_s.assign(n, -1);
+  b.anchor.assign(n, -1);
+  return b;
+}
+
 Clip apply(const Motion& motion, const Skeleton& target, const Mat4& bind_to_world, const Binding& b) {
   const Skeleton& src = motion.skeleton;
   const std::int32_t J = target.num_joints();
@@ -249,11 +260,7 @@ std::string refusal(const std::string& what, const Skeleton& s, const RigMapping
 Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_world, const RetargetMap& map) {
   const Skeleton& src = motion.skeleton;
   const std::int32_t J = target.num_joints();
-  Binding b;
-  b.source_of.assign(static_cast<std::size_t>(J), -1);
-  b.aim_t.assign(static_cast<std::size_t>(J), -1);
-  b.aim_s.assign(static_cast<std::size_t>(J), -1);
-  b.anchor.assign(static_cast<std::size_t>(J), -1);
+  Binding b = unbound(J);
   for (const auto& [sn, tn] : map.pairs) {
     const std::int32_t s = src.find(sn), t = target.find(tn);
     if (s < 0 || t < 0) continue;
@@ -281,11 +288,7 @@ Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_
   const RigMapping mt = map_rig(target, opt.target_aliases, bind_to_world);
   GATCORE_CHECK(ms.humanoid(), refusal(motion.name + ": the motion's skeleton", src, ms));
   const std::int32_t J = target.num_joints();
-  Binding b;
-  b.source_of.assign(static_cast<std::size_t>(J), -1);
-  b.aim_t.assign(static_cast<std::size_t>(J), -1);
-  b.aim_s.assign(static_cast<std::size_t>(J), -1);
-  b.anchor.assign(static_cast<std::size_t>(J), -1);
+  Binding b = unbound(J);
   b.hips_s = ms.find("pelvis");
   if (!mt.humanoid()) {
     if (!opt.root_motion_only) throw InvalidArgument(refusal(opt.target_name, target, mt));

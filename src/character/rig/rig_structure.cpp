@@ -77,8 +77,8 @@ void propose_by_structure(const Skeleton& s, const std::vector<Vec3>& pos, RigMa
   // Exactly two feet: four (a quadruped) or eight (a spider) are not a humanoid.
   if (low.size() != 2 || head < 0) return;
   // Facing: the toes point forward (else +Z); the character's left is
-  // up x forward... i.e. +X when it faces +Z. The lateral axis is the line
-  // between the feet, so rigs facing +X (CesiumMan) read as well as +Z ones.
+  // up x forward (+X when it faces +Z). The lateral axis is the line between
+  // the feet, so rigs facing +X (CesiumMan) read as well as +Z ones.
   Vec3 across = {pos[low[0]][0] - pos[low[1]][0], 0.0f, pos[low[0]][2] - pos[low[1]][2]};
   const float width = std::sqrt(across[0] * across[0] + across[2] * across[2]);
   if (width < 0.05f * H) return;

@@ -38,9 +38,10 @@ bool is_chain_part(const std::string& part);
 
 // Fills parts in `required_humanoid_parts()` (and the chain / hand / foot
 // parts around them) that names did not give, from the skeleton's shape:
-// world rest positions `pos`, up = +Y, the character's left = +X facing +Z
-// (flipped when its toes point to -Z). Only joints with role `other` are
-// given parts; they are flagged in by_structure.
+// world rest positions `pos`, up = +Y; the lateral axis is the line between
+// the feet, the forward direction the toes' (else +Z), the character's left
+// = up x forward. Only joints with role `other` are given parts; they are
+// flagged in by_structure.
 void propose_by_structure(const Skeleton& s, const std::vector<Vec3>& pos, RigMapping& m);
 
 }  // namespace gatcore::character::rig_detail
