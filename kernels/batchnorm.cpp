@@ -42,9 +42,9 @@ namespace isa_avx512 = isa_baseline;
 
 void batchnorm_train_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps, float momentum,
                              const Tensor& y, const Tensor& save_mean, const Tensor& save_invstd,
-                             const Tensor& running_mean, const Tensor& running_var) {
+                             const Tensor& running_mean, const Tensor& running_var, const SumAcross& across) {
   (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_train_forward : isa_baseline::batchnorm_train_forward)(
-      x, gamma, beta, eps, momentum, y, save_mean, save_invstd, running_mean, running_var);
+      x, gamma, beta, eps, momentum, y, save_mean, save_invstd, running_mean, running_var, across);
 }
 
 void batchnorm_eval_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, const Tensor& running_mean,
@@ -55,9 +55,9 @@ void batchnorm_eval_forward(const Tensor& x, const Tensor& gamma, const Tensor& 
 
 void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
                               const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
-                              const Tensor& d_gamma, const Tensor& d_beta) {
+                              const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across) {
   (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_train_backward : isa_baseline::batchnorm_train_backward)(
-      x, gamma, save_mean, save_invstd, d_y, d_x, d_gamma, d_beta);
+      x, gamma, save_mean, save_invstd, d_y, d_x, d_gamma, d_beta, across);
 }
 
 void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& running_mean,

@@ -11,6 +11,9 @@ packages=(
   # Vulkan backend: headers/loader, the GLSL compiler, and Mesa lavapipe (a
   # CPU Vulkan device) so the Vulkan tests run without a GPU.
   glslang-tools libvulkan-dev mesa-vulkan-drivers vulkan-tools
+  # Data-parallel training (src/dist/): Open MPI's library and mpirun, which
+  # the tests/dist/ tests launch at 2 and 4 ranks.
+  libopenmpi-dev openmpi-bin
 )
 
 missing=()

@@ -80,6 +80,19 @@ class CpuBackend final : public Backend {
                                const Tensor& d_beta) override {
     cpu::batchnorm_eval_backward(x, gamma, rm, rv, eps, d_y, d_x, d_gamma, d_beta);
   }
+  void batchnorm_train_forward_across(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
+                                      float momentum, const Tensor& y, const Tensor& save_mean,
+                                      const Tensor& save_invstd, const Tensor& running_mean,
+                                      const Tensor& running_var, const SumAcross& across) override {
+    cpu::batchnorm_train_forward(x, gamma, beta, eps, momentum, y, save_mean, save_invstd, running_mean, running_var,
+                                 across);
+  }
+  void batchnorm_train_backward_across(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
+                                       const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
+                                       const Tensor& d_gamma, const Tensor& d_beta,
+                                       const SumAcross& across) override {
+    cpu::batchnorm_train_backward(x, gamma, save_mean, save_invstd, d_y, d_x, d_gamma, d_beta, across);
+  }
 
   void sum_all(const Tensor& x, const Tensor& out) override {
     out.at(0, 0) = static_cast<float>(cpu::sum_all(x));
@@ -187,6 +200,19 @@ CpuBackend g_cpu;
 std::array<Backend*, 2> g_backends{&g_cpu, nullptr};
 
 }  // namespace
+
+void Backend::batchnorm_train_forward_across(const Tensor&, const Tensor&, const Tensor&, float, float,
+                                             const Tensor&, const Tensor&, const Tensor&, const Tensor&,
+                                             const Tensor&, const SumAcross&) {
+  throw Error("batch_norm: a batch split over processes (SyncBatchNorm) runs on the CPU backend only; "
+              "train data-parallel on --device cpu");
+}
+void Backend::batchnorm_train_backward_across(const Tensor&, const Tensor&, const Tensor&, const Tensor&,
+                                              const Tensor&, const Tensor&, const Tensor&, const Tensor&,
+                                              const SumAcross&) {
+  throw Error("batch_norm: a batch split over processes (SyncBatchNorm) runs on the CPU backend only; "
+              "train data-parallel on --device cpu");
+}
 
 Backend& backend(Device d) {
   Backend* b = g_backends[static_cast<std::size_t>(d)];

@@ -23,6 +23,8 @@
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
+#include "gatcore/character/data/training_data.hpp"
+#include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
@@ -91,6 +93,19 @@ bool parse_long(const char* flag, const char* v, long lo, long hi, long& out) {
   }
   out = x;
   return true;
+}
+
+// Fault injection for the data-parallel tests (tests/dist/): GAT_TRAIN_FAULT=R:S
+// makes rank R kill itself (SIGKILL, no clean-up) once it has taken S optimiser steps.
+void maybe_inject_fault(int rank, long steps) {
+  static const char* spec = std::getenv("GAT_TRAIN_FAULT");
+  int r = -1;
+  long s = -1;
+  if (spec && std::sscanf(spec, "%d:%ld", &r, &s) == 2 && r == rank && steps >= s) {
+    std::fprintf(stderr, "gat train: rank %d: GAT_TRAIN_FAULT: killing myself after step %ld\n", rank, steps);
+    std::fflush(nullptr);
+    std::raise(SIGKILL);
+  }
 }
 
 std::string hms(double s) {
@@ -267,7 +282,11 @@ int gat::cmd_train(int argc, char** argv) {
   // Parameters are drawn (or loaded) on the CPU and moved before the
   // optimiser allocates its moments next to them.
   model->to(dev);
-  Trainer trainer(*model, opt, norm);
+  // Under mpirun / srun: data parallel over the launched processes (rank 0
+  // prints and writes the checkpoints); else one process, as always.
+  dist::Communicator& comm = dist::world();
+  const bool root = comm.rank() == 0;
+  Trainer trainer(*model, opt, norm, comm);
   if (!resume.empty()) restore_training_state(loaded.file, trainer, resume);
 
   const std::string source = td ? "dataset " + data + " (" + std::to_string(td->super.num_bones()) + " bones)"
@@ -275,11 +294,13 @@ int gat::cmd_train(int argc, char** argv) {
   const std::string task_text = cfg.task == Task::weights
                                     ? std::string("weights, KL loss")
                                     : std::string("displacement, ") + displacement_loss_name(cfg.loss) + " loss";
-  std::printf("gat train: %s (%s), %lld parameters, %s: %zu training / %zu validation samples, "
-              "batch %d, %d threads, device %s\n",
-              cfg.name.c_str(), task_text.c_str(), static_cast<long long>(model->registry().num_parameters()),
-              source.c_str(), train.size(), val.size(), opt.batch_size, omp_get_max_threads(),
-              dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu");
+  if (root)
+    std::printf("gat train: %s (%s), %lld parameters, %s: %zu training / %zu validation samples, "
+                "batch %d, %d threads, device %s%s\n",
+                cfg.name.c_str(), task_text.c_str(), static_cast<long long>(model->registry().num_parameters()),
+                source.c_str(), train.size(), val.size(), opt.batch_size, omp_get_max_threads(),
+                dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu",
+                comm.size() > 1 ? (", " + std::to_string(comm.size()) + " MPI ranks (data parallel)").c_str() : "");
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
                                            {"samples", std::to_string(samples)},
                                            {"batch", std::to_string(opt.batch_size)},
@@ -313,10 +334,10 @@ int gat::cmd_train(int argc, char** argv) {
     std::erase_if(history, [&](const LossRecord& r) { return r.epoch > trainer.epoch(); });
   }
   if (trainer.epoch() >= epochs) {
-    std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
+    if (root) std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
     return 0;
   }
-  const bool tty = isatty(fileno(stderr));
+  const bool tty = root && isatty(fileno(stderr));
   std::signal(SIGINT, on_sigint);
   if (tty) std::fprintf(stderr, "(Ctrl-C stops after the current epoch's checkpoint; twice quits at once)\n");
   const auto t0 = std::chrono::steady_clock::now();
@@ -328,6 +349,7 @@ int gat::cmd_train(int argc, char** argv) {
       train = data_samples(character::DatasetPart::train, trainer.epoch());
     const auto te = std::chrono::steady_clock::now();
     const auto progress = [&](int e, std::int64_t b, std::int64_t nb, double loss) {
+      maybe_inject_fault(comm.rank(), trainer.optimiser().steps());
       if (!tty) return;
       const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - te).count();
       const double sps = double(std::min<std::int64_t>(b * opt.batch_size, std::int64_t(train.size()))) / std::max(el, 1e-9);
@@ -344,28 +366,37 @@ int gat::cmd_train(int argc, char** argv) {
     const EpochStats st = trainer.run_epoch(train, validate ? val : std::vector<Sample>{}, progress);
     history.push_back({st.epoch, st.train_loss, st.val_loss, double(st.lr), st.seconds});
     extra["loss_history"] = gatcore::character::format_history(history);
-    save_checkpoint(out, *model, norm, &trainer, extra);
-    gatcore::character::write_loss_outputs(history, curve);
+    if (root) {  // every rank holds the same model; one writes it
+      save_checkpoint(out, *model, norm, &trainer, extra);
+      gatcore::character::write_loss_outputs(history, curve);
+    }
     if (tty) std::fprintf(stderr, "\r\033[K");
     char val_text[32] = "-";
     if (st.val_loss >= 0) std::snprintf(val_text, sizeof val_text, "%.6f", st.val_loss);
-    std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
+    if (root) std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
                 epochs, st.train_loss, val_text, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
                 out.c_str());
+    if (root && comm.size() > 1)
+      std::printf("  rank 0: %.0f steps, %.3f MB sent per step, %.2f s in collectives\n", double(st.batches),
+                  st.comm_bytes / 1e6 / double(std::max<std::int64_t>(st.batches, 1)), st.comm_seconds);
     std::fflush(stdout);
     const double trained_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (minutes > 0 && trained_s >= minutes * 60.0 && trainer.epoch() < epochs) {
-      std::printf("time budget of %g minutes reached after epoch %d (%s); model written to %s\n", minutes, st.epoch,
+    // Stopping is rank 0's decision (clocks and Ctrl-C differ between ranks).
+    int stop[2] = {minutes > 0 && trained_s >= minutes * 60.0 && trainer.epoch() < epochs, int(g_stop)};
+    comm.broadcast(stop, sizeof stop, 0);
+    if (stop[0]) {
+      if (root) std::printf("time budget of %g minutes reached after epoch %d (%s); model written to %s\n", minutes, st.epoch,
                   hms(trained_s).c_str(), out.c_str());
       return 0;
     }
-    if (g_stop) {
+    if (stop[1]) {
       std::signal(SIGINT, SIG_DFL);
-      std::printf("interrupted: stopped after epoch %d; resume with --resume %s\n", st.epoch, out.c_str());
+      if (root) std::printf("interrupted: stopped after epoch %d; resume with --resume %s\n", st.epoch, out.c_str());
       return 130;
     }
   }
-  std::printf("trained %ld epochs in %s; model written to %s, loss curve to %s (+ %s)\n", epochs - first,
+  if (root)
+    std::printf("trained %ld epochs in %s; model written to %s, loss curve to %s (+ %s)\n", epochs - first,
               hms(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()).c_str(), out.c_str(),
               curve.c_str(), gatcore::character::history_csv_path(curve).c_str());
   return 0;

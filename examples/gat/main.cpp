@@ -2,8 +2,10 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <string>
 
 #include "commands.hpp"
+#include "gatcore/dist/communicator.hpp"
 
 namespace {
 
@@ -35,6 +37,14 @@ int main(int argc, char** argv) {
     try {
       return c.run(argc - 1, argv + 1);
     } catch (const std::exception& e) {
+      // One of several MPI ranks: end them all (they may be waiting for this
+      // one in a collective), naming the rank.
+      if (gatcore::dist::launched_by_mpi() && gatcore::dist::world().size() > 1) {
+        auto& w = gatcore::dist::world();
+        w.abort("gat " + std::string(c.name) + ": rank " + std::to_string(w.rank()) + " of " +
+                    std::to_string(w.size()) + ": " + e.what() + " (stopping all ranks)",
+                1);
+      }
       std::fprintf(stderr, "gat %s: %s\n", c.name, e.what());
       return 1;
     }

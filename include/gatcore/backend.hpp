@@ -11,6 +11,7 @@
 #include <span>
 
 #include "gatcore/activation.hpp"
+#include "gatcore/batch_split.hpp"
 #include "gatcore/graph.hpp"
 #include "gatcore/tensor.hpp"
 
@@ -57,6 +58,16 @@ class Backend {
   virtual void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& running_mean,
                                        const Tensor& running_var, float eps, const Tensor& d_y, const Tensor& d_x,
                                        const Tensor& d_gamma, const Tensor& d_beta) = 0;
+  // SyncBatchNorm (a batch split over processes, batch_split.hpp): the
+  // training forward / backward with their statistics summed through
+  // `across`. Only the CPU backend has them; the default says so.
+  virtual void batchnorm_train_forward_across(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
+                                              float momentum, const Tensor& y, const Tensor& save_mean,
+                                              const Tensor& save_invstd, const Tensor& running_mean,
+                                              const Tensor& running_var, const SumAcross& across);
+  virtual void batchnorm_train_backward_across(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
+                                               const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
+                                               const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across);
 
   // Reductions and losses into [1, 1] tensors; backward takes d_out as [1, 1].
   virtual void sum_all(const Tensor& x, const Tensor& out) = 0;

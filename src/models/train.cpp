@@ -1,5 +1,7 @@
 #include "gatcore/models/train.hpp"
 #include "gatcore/backend.hpp"
+#include "gatcore/batch_split.hpp"
+#include "gatcore/dist/data_parallel.hpp"
 #include "gatcore/vulkan.hpp"
 
 #include <algorithm>
@@ -221,8 +223,8 @@ void forget_graphs(const Batch& b, Device d) {
 }
 }  // namespace
 
-Trainer::Trainer(Model& model, TrainOptions opt, Normaliser norm)
-    : model_(model), opt_(opt), norm_(std::move(norm)), adam_(model.parameters(), AdamOptions{opt.lr}),
+Trainer::Trainer(Model& model, TrainOptions opt, Normaliser norm, dist::Communicator& comm)
+    : model_(model), comm_(comm), opt_(opt), norm_(std::move(norm)), adam_(model.parameters(), AdamOptions{opt.lr}),
       rng_(opt.seed ^ 0x5851f42d4c957f2dull) {
   plateau_.factor = opt.plateau_factor;
   plateau_.patience = opt.plateau_patience;
@@ -233,6 +235,8 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
                               const BatchCallback& on_batch) {
   GATCORE_CHECK(!train.empty(), "Trainer: no training samples");
   const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t bytes0 = comm_.bytes_sent();
+  const double comm0 = comm_.seconds_in_collectives();
   EpochStats st;
   st.epoch = ++epoch_;
   std::vector<std::size_t> order(train.size());
@@ -241,6 +245,17 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
   const auto bs = std::size_t(std::max(1, opt_.batch_size));
   const std::int64_t nb = std::int64_t((train.size() + bs - 1) / bs);
   const std::vector<int> pools = model_.pool_sizes();
+  if (comm_.size() > 1) {
+    // Every rank starts the epoch from rank 0's model and optimiser state:
+    // one copy even after a resume, or on ranks whose CPUs round differently.
+    std::vector<Tensor> state;
+    for (const auto& p : model_.registry().params) state.push_back(p.var.value());
+    for (const auto& b : model_.registry().buffers) state.push_back(b.tensor);
+    for (const Tensor& t : adam_.first_moments()) state.push_back(t);
+    for (const Tensor& t : adam_.second_moments()) state.push_back(t);
+    dist::broadcast_tensors(comm_, state);
+    for (const auto& p : model_.registry().params) p.var.value().bump_version();
+  }
   double sum = 0;
   for (std::int64_t b = 0; b < nb; ++b) {
     std::vector<const Sample*> smp;
@@ -250,16 +265,10 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
       smp.push_back(&s);
       sel.push_back(sample_vertices(s.graph->num_nodes, opt_.sampling, opt_.sample_vertices, rng_));
     }
-    Batch batch = make_batch(smp, sel, norm_, pools);
-    to_device(batch, model_.device());  // once per batch; nothing else crosses until the loss read
-    Var loss = task_loss(model_.config(), model_.forward(batch, true), batch.target);
-    adam_.zero_grad();
-    backward(loss);
-    const double l = to(loss.value(), Device::cpu).at(0, 0);  // the step's one host read
+    const double l = step(smp, sel, pools);
     GATCORE_CHECK(std::isfinite(l), "training diverged at epoch ", epoch_, ", batch ", b + 1, " (loss ", l,
                   "); try a smaller learning rate");
     adam_.step();
-    forget_graphs(batch, model_.device());
     sum += l;
     st.samples += std::int64_t(smp.size());
     if (on_batch) on_batch(epoch_, b + 1, nb, l);
@@ -280,19 +289,75 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
     adam_.set_lr(std::max(opt_.min_lr, adam_.lr() * opt_.step_gamma));
   }
   st.lr = adam_.lr();
+  st.comm_bytes = double(comm_.bytes_sent() - bytes0);
+  st.comm_seconds = comm_.seconds_in_collectives() - comm0;
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return st;
 }
 
+double Trainer::step(const std::vector<const Sample*>& smp, const std::vector<std::vector<std::int32_t>>& sel,
+                     const std::vector<int>& pools) {
+  adam_.zero_grad();
+  if (comm_.size() == 1) {
+    Batch batch = make_batch(smp, sel, norm_, pools);
+    to_device(batch, model_.device());  // once per batch; nothing else crosses until the loss read
+    Var loss = task_loss(model_.config(), model_.forward(batch, true), batch.target);
+    backward(loss);
+    const double l = to(loss.value(), Device::cpu).at(0, 0);  // the step's one host read
+    forget_graphs(batch, model_.device());
+    return l;
+  }
+  // This rank's characters of the batch; their rows within the batch's rows.
+  const dist::Share share = dist::share_of(smp.size(), comm_.rank(), comm_.size());
+  BatchSplit split;
+  split.sum = [this](double* v, std::size_t n) { comm_.sum(v, n); };
+  for (std::size_t k = 0; k < smp.size(); ++k) {
+    const auto rows = std::int64_t(sel[k].empty() ? smp[k]->graph->num_nodes : std::int64_t(sel[k].size()));
+    if (k < share.begin) split.row_begin += rows;
+    if (k >= share.begin && k < share.end) split.rows += rows;
+    split.global_rows += rows;
+  }
+  // A batch with fewer characters than ranks: the ranks without one run the
+  // first character as a placeholder (split.rows = 0: it adds nothing), so
+  // that they take part in every sum of the step.
+  const std::size_t b0 = share.empty() ? 0 : share.begin, b1 = share.empty() ? 1 : share.end;
+  const std::vector<const Sample*> mine(smp.begin() + std::ptrdiff_t(b0), smp.begin() + std::ptrdiff_t(b1));
+  const std::vector<std::vector<std::int32_t>> mine_sel(sel.begin() + std::ptrdiff_t(b0),
+                                                        sel.begin() + std::ptrdiff_t(b1));
+  Batch batch = make_batch(mine, mine_sel, norm_, pools);
+  to_device(batch, model_.device());
+  double l = 0;
+  {
+    BatchSplitScope scope(split);
+    // The loss is a mean over the batch's rows: this rank's mean weighted by
+    // its share of the rows, so the ranks' gradients add up to the batch's.
+    const double w = double(split.rows) / double(split.global_rows);
+    Var loss = scale(task_loss(model_.config(), model_.forward(batch, true), batch.target), float(w));
+    backward(loss);
+    l = to(loss.value(), Device::cpu).at(0, 0);
+  }
+  forget_graphs(batch, model_.device());
+  dist::sum_gradients(comm_, model_.parameters());
+  comm_.sum(&l, 1);
+  return l;
+}
+
 double Trainer::evaluate(const std::vector<Sample>& samples) {
   NoGradGuard ng;
-  double sum = 0;
-  for (const Sample& s : samples) {
+  // Sharded by sample (round robin); every sample's loss lands in its slot
+  // and the slots are summed in sample order, on every rank: the same number
+  // as one process computes.
+  std::vector<double> losses(samples.size(), 0.0);
+  for (std::size_t i = std::size_t(comm_.rank()); i < samples.size(); i += std::size_t(comm_.size())) {
+    const Sample& s = samples[i];
     Batch b = make_batch({&s}, {{}}, norm_, model_.pool_sizes());
     to_device(b, model_.device());
-    sum += to(task_loss(model_.config(), model_.forward(b, false), b.target).value(), Device::cpu).at(0, 0);
+    losses[i] = to(task_loss(model_.config(), model_.forward(b, false), b.target).value(), Device::cpu).at(0, 0);
     forget_graphs(b, model_.device());
   }
+  comm_.sum(losses.data(), losses.size());
+  double sum = 0;
+  for (double l : losses) sum += l;
   return samples.empty() ? 0.0 : sum / double(samples.size());
 }
 

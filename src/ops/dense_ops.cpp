@@ -199,19 +199,44 @@ Var batch_norm(const Var& x, const Var& gamma, const Var& beta, BatchNormState& 
   }
   GATCORE_CHECK(st.running_mean.cols() == C && st.running_var.cols() == C, op, ": running statistics have ",
                 st.running_mean.cols(), " columns, x has ", C);
-  if (training) GATCORE_CHECK(x.rows() > 1, op, ": training needs more than one row to estimate a variance");
+  // A batch split over processes (batch_split.hpp): SyncBatchNorm, the
+  // statistics summed over the processes (a placeholder share adds zeros).
+  const BatchSplit* split = training ? current_batch_split() : nullptr;
+  SumAcross across;
+  if (split)
+    across = [sum = split->sum, placeholder = split->placeholder()](double* v, std::size_t n) {
+      if (placeholder) std::fill(v, v + n, 0.0);
+      sum(v, n);
+    };
+  if (training && !split)
+    GATCORE_CHECK(x.rows() > 1, op, ": training needs more than one row to estimate a variance");
   const bool grad = needs_grad({&x, &gamma, &beta});
   Var y = make_output(op, be, x.rows(), C, into, grad);
   const float eps = st.eps;
   if (training) {
     Tensor mean = be.empty(1, C), invstd = be.empty(1, C);
-    be.batchnorm_train_forward(x.value(), gamma.value(), beta.value(), eps, st.momentum, y.value(), mean, invstd,
-                               st.running_mean, st.running_var);
+    if (split)
+      be.batchnorm_train_forward_across(x.value(), gamma.value(), beta.value(), eps, st.momentum, y.value(), mean,
+                                        invstd, st.running_mean, st.running_var, across);
+    else
+      be.batchnorm_train_forward(x.value(), gamma.value(), beta.value(), eps, st.momentum, y.value(), mean, invstd,
+                                 st.running_mean, st.running_var);
     if (grad)
-      current_tape().record(op, [&be, xi = x.impl(), gi = gamma.impl(), bi = beta.impl(), yi = y.impl(),
+      current_tape().record(op, [&be, across, placeholder = split && split->placeholder(), xi = x.impl(),
+                                 gi = gamma.impl(), bi = beta.impl(), yi = y.impl(),
                                  xs = SavedTensor(x.value(), "x"), gs = SavedTensor(gamma.value(), "gamma"), mean,
                                  invstd] {
         Tensor dy = yi->grad_if_any();
+        if (across) {
+          // dy may not have arrived on this process (no loss reached it): zeros, the sums still happen.
+          if (!dy.defined()) dy = be.zeros(xs.get(op).rows(), xs.get(op).cols());
+          // A placeholder's rows are not in the batch: no gradient flows from them (the whole batch's
+          // Σdy terms of d_x would otherwise make one up).
+          be.batchnorm_train_backward_across(xs.get(op), gs.get(op), mean, invstd, dy,
+                                             placeholder ? Tensor{} : grad_for(xi), grad_for(gi), grad_for(bi),
+                                             across);
+          return;
+        }
         if (!dy.defined()) return;
         be.batchnorm_train_backward(xs.get(op), gs.get(op), mean, invstd, dy, grad_for(xi), grad_for(gi),
                                     grad_for(bi));
