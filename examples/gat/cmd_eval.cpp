@@ -17,6 +17,7 @@
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/viz/render.hpp"
+#include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
@@ -139,7 +140,15 @@ int gat::cmd_eval(int argc, char** argv) {
   const auto& data_ = samples_;
   m.to(dev);
   m.fold_batch_norm();
-  Trainer t(m, TrainOptions{}, l.norm);
+  // Under mpirun / srun the samples are sharded over the ranks (sample i on
+  // rank i mod N); every per-sample figure lands in its own slot, the slots
+  // are summed over the ranks (exactly: one rank fills each) and rank 0
+  // combines and prints them in sample order, the same numbers for any N.
+  dist::Communicator& comm = dist::world();
+  const bool root = comm.rank() == 0;
+  const auto mine = [&](std::size_t i) { return int(i % std::size_t(comm.size())) == comm.rank(); };
+  if (!root && !std::freopen("/dev/null", "w", stdout)) return 1;  // one report, from rank 0
+  Trainer t(m, TrainOptions{}, l.norm, comm);
   const std::string device_label = dev == Device::vulkan ? vulkan::current_device().name : std::string("cpu");
   if (data.empty())
     std::printf("gat eval: %s (%s) from %s on %ld held-out tube samples, device %s\n", cfg.name.c_str(),
@@ -147,13 +156,19 @@ int gat::cmd_eval(int argc, char** argv) {
   else
     std::printf("gat eval: %s (%s) from %s on %zu samples of the %s characters of %s, device %s\n", cfg.name.c_str(),
                 task_name(cfg.task), path.c_str(), data_.size(), part.c_str(), data.c_str(), device_label.c_str());
-  std::printf("  loss (%s, normalised targets): %.6f\n", cfg.task == Task::weights ? "KL" : "MSE", t.evaluate(data_));
-  double err = 0, maxerr = 0, base = 0;
-  std::int64_t count = 0, tp = 0, fp = 0, fn = 0;
-  std::vector<Tensor> predictions;
-  for (const Sample& s : data_) {
+  const double loss = t.evaluate(data_);
+  std::printf("  loss (%s, normalised targets): %.6f\n", cfg.task == Task::weights ? "KL" : "MSE", loss);
+  // Per sample: error sum, max, LBS-alone sum, vertices, true / false positives, false negatives.
+  constexpr std::size_t kStats = 7;
+  std::vector<double> stats(data_.size() * kStats, 0.0);
+  std::vector<Tensor> predictions(data_.size());
+  for (std::size_t k = 0; k < data_.size(); ++k) {
+    if (!mine(k)) continue;
+    const Sample& s = data_[k];
     Tensor y = predict(m, s, l.norm, cfg.task == Task::weights ? cfg.top_k : 0);
-    if (cfg.task == Task::weights) predictions.push_back(y);
+    if (cfg.task == Task::weights) predictions[k] = y;
+    double err = 0, maxerr = 0, base = 0;
+    std::int64_t count = 0, tp = 0, fp = 0, fn = 0;
     for (std::int64_t i = 0; i < y.rows(); ++i, ++count) {
       double e = 0, b = 0;
       for (std::int64_t j = 0; j < y.cols(); ++j) {
@@ -170,6 +185,16 @@ int gat::cmd_eval(int argc, char** argv) {
       if (cfg.task == Task::displacement) e = std::sqrt(e), b = std::sqrt(b);
       err += e, base += b, maxerr = std::max(maxerr, e);
     }
+    const double row[kStats] = {err, maxerr, base, double(count), double(tp), double(fp), double(fn)};
+    std::copy(row, row + kStats, stats.begin() + std::ptrdiff_t(k * kStats));
+  }
+  comm.sum(stats.data(), stats.size());
+  double err = 0, maxerr = 0, base = 0;
+  std::int64_t count = 0, tp = 0, fp = 0, fn = 0;
+  for (std::size_t k = 0; k < data_.size(); ++k) {
+    const double* r = stats.data() + k * kStats;
+    err += r[0], maxerr = std::max(maxerr, r[1]), base += r[2];
+    count += std::int64_t(r[3]), tp += std::int64_t(r[4]), fp += std::int64_t(r[5]), fn += std::int64_t(r[6]);
   }
   if (cfg.task == Task::weights) {
     std::printf("  L1 weight error per vertex: mean %.5f  max %.5f\n", err / double(count), maxerr);
@@ -185,9 +210,15 @@ int gat::cmd_eval(int argc, char** argv) {
       eo.poses = int(poses);
       eo.pose_angle = td.description.pose_angle;
       eo.seed = std::uint32_t(seed);
-      std::vector<character::CharacterWeightEval> per;
+      // Each character on the rank that predicted it; the figures gathered as above.
+      constexpr std::size_t kFields = 10;
+      std::vector<double> fields(data_.size() * kFields, 0.0);
+      std::vector<character::CharacterWeightEval> per(data_.size());
       for (std::size_t i = 0; i < data_.size(); ++i) {
         const std::int32_t c = chars[i];
+        per[i].name = std::filesystem::path(data_[i].name).parent_path().filename().string() + "/" +
+                      std::filesystem::path(data_[i].name).stem().string();
+        if (!mine(i)) continue;
         const Tensor y = predictions[i].contiguous() ? predictions[i] : predictions[i].clone();
         const Tensor t = data_[i].target.contiguous() ? data_[i].target : data_[i].target.clone();
         const auto& mask = td.super.mask[std::size_t(c)];
@@ -195,8 +226,7 @@ int gat::cmd_eval(int argc, char** argv) {
             td.characters[std::size_t(c)], std::span<const float>(y.data(), std::size_t(y.numel())),
             std::span<const float>(t.data(), std::size_t(t.numel())), y.cols(), td.super.joint_to_bone[std::size_t(c)],
             mask, eo, c);
-        r.name = std::filesystem::path(data_[i].name).parent_path().filename().string() + "/" +
-                 std::filesystem::path(data_[i].name).stem().string();
+        r.name = per[i].name;
         if (!errormap_dir.empty()) {
           std::filesystem::create_directories(errormap_dir);
           const auto& mesh = td.characters[std::size_t(c)].character.mesh;
@@ -208,15 +238,31 @@ int gat::cmd_eval(int argc, char** argv) {
           std::replace(file.begin(), file.end(), '/', '_');
           const std::string png = (std::filesystem::path(errormap_dir) / (file + ".png")).string();
           character::write_png(png, character::render_error_map(mesh.positions, mesh.triangles, r.vertex_l1, ro));
-          std::printf("  error map: %s\n", png.c_str());
         }
-        per.push_back(std::move(r));
+        const double f[kFields] = {double(r.vertices), r.height, r.weights.precision, r.weights.recall,
+                                   r.weights.l1_mean, r.weights.l1_max, r.deformation.mean, r.deformation.max,
+                                   r.deformation.min, double(r.deformation.count)};
+        std::copy(f, f + kFields, fields.begin() + std::ptrdiff_t(i * kFields));
+      }
+      comm.sum(fields.data(), fields.size());
+      for (std::size_t i = 0; i < data_.size(); ++i) {
+        const double* f = fields.data() + i * kFields;
+        auto& r = per[i];
+        r.vertices = std::int64_t(f[0]), r.height = f[1];
+        r.weights = {f[2], f[3], f[4], f[5]};
+        r.deformation.mean = f[6], r.deformation.max = f[7], r.deformation.min = f[8];
+        r.deformation.count = std::int64_t(f[9]);
+        if (!errormap_dir.empty()) {
+          std::string file = r.name;
+          std::replace(file.begin(), file.end(), '/', '_');
+          std::printf("  error map: %s\n", (std::filesystem::path(errormap_dir) / (file + ".png")).string().c_str());
+        }
       }
       std::printf("\n%s", character::weight_eval_markdown(per).c_str());
       std::printf("(deformation: LBS with predicted vs artist weights, %d random poses within +-%.2f rad, two worst "
                   "poses, divided by the character's height)\n",
                   eo.poses, double(eo.pose_angle));
-      if (!json_path.empty()) {
+      if (!json_path.empty() && root) {
         character::write_text_atomic(json_path, character::weight_eval_json(cfg.name, per, eo));
         std::printf("  JSON: %s\n", json_path.c_str());
       }

@@ -30,7 +30,15 @@ int main(int argc, char** argv) {
       train.push_back(fixtures::wave_sample(9 + k % 3, 8 + k % 2, 0.3f * float(k), weights, 5, "t" + std::to_string(k)));
     for (int k = 0; k < 5; ++k)
       val.push_back(fixtures::wave_sample(10, 9, 0.25f + 0.5f * float(k), weights, 5, "v" + std::to_string(k)));
-    const ModelConfig cfg = ModelConfig::defaults(name, 9, weights ? 5 : 3);
+    ModelConfig cfg = ModelConfig::defaults(name, 9, weights ? 5 : 3);
+    // The papers' structure (BatchNorm, pooling, attention, Dropout) at test widths: seconds, not minutes.
+    cfg.stage1 = {32, 32};
+    cfg.global_mlp = {64, 128};
+    cfg.classifier = {128, 64};
+    cfg.modules = 2;
+    cfg.blocks = 3;
+    cfg.head = {64, 32};
+    cfg.fc = {128, 64, 64, 32};
     auto model = make_model(cfg, 11);
     TrainOptions opt = TrainOptions::defaults_for(cfg);
     opt.batch_size = 4;
