@@ -18,6 +18,8 @@ mode=$1
 export OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive
 # CI runs as root; Open MPI refuses that unless told (harmless otherwise).
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# Containers often forbid the cross-process memory copy Open MPI's shared-memory transport tries first.
+export OMPI_MCA_btl_vader_single_copy_mechanism=none
 # A hung collective must fail the test, not CI: every launch is bounded.
 mpi() { n=$1; shift; timeout 120 "$MPIEXEC" --oversubscribe --bind-to none -np "$n" "$@"; }
 # Lines "name value" of two result files: the same names, values within a relative tolerance.
