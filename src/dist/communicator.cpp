@@ -53,12 +53,12 @@ Communicator& world() {
 #ifdef GATCORE_HAS_MPI
     if (launched_by_mpi()) w = make_mpi_world();
 #else
-    if (launched_by_mpi())
-      if (const char* n = std::getenv("OMPI_COMM_WORLD_SIZE"); n && std::atoi(n) > 1) {
-        // N copies that each think they are alone would each train the whole
-        // model and overwrite each other's checkpoints: refuse.
-        std::fprintf(stderr, "gatcore: started by an MPI launcher with %s processes, but built without MPI "
-                             "(install libopenmpi-dev and reconfigure)\n", n);
+    // N copies that each think they are alone would each train the whole
+    // model and overwrite each other's checkpoints: refuse.
+    for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_NTASKS"})
+      if (const char* n = std::getenv(v); launched_by_mpi() && n && std::atoi(n) > 1) {
+        std::fprintf(stderr, "gatcore: started by an MPI launcher with %s processes (%s), but built without MPI "
+                             "(install libopenmpi-dev and reconfigure)\n", n, v);
         std::exit(2);
       }
 #endif
