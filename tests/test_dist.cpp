@@ -165,3 +165,45 @@ TEST_CASE("Trainer over a group of one is the single-process trainer, bit for bi
   for (std::size_t k = 0; k < a->registry().params.size(); ++k)
     CHECK(a->registry().params[k].var.value().to_vector() == b->registry().params[k].var.value().to_vector());
 }
+
+namespace {
+// Rank `r` of `n` for code that asks who it is but does not communicate.
+struct NamedRank final : dist::Communicator {
+  NamedRank(int r, int n) : r(r), n(n) {}
+  int r, n;
+  int rank() const override { return r; }
+  int size() const override { return n; }
+  void sum(float*, std::size_t) override { FAIL("no communication expected"); }
+  void sum(double*, std::size_t) override { FAIL("no communication expected"); }
+  void broadcast(void*, std::size_t, int) override { FAIL("no communication expected"); }
+  void barrier() override {}
+  [[noreturn]] void abort(const std::string& m, int) override { throw Error(m); }
+  std::size_t bytes_sent() const override { return 0; }
+  double seconds_in_collectives() const override { return 0; }
+};
+}  // namespace
+
+TEST_CASE("samples_needed: every sample of the epoch is some rank's, each rank needs about its share") {
+  using namespace gatcore::models;
+  std::vector<Sample> train{fixtures::wave_sample(6, 5, 0.f, true, 5)};
+  const ModelConfig cfg = ModelConfig::defaults("fc", 9, 5);
+  auto m = make_model(cfg, 1);
+  TrainOptions o = TrainOptions::defaults_for(cfg);
+  o.batch_size = 4;
+  const std::size_t count = 22;  // batches of 4, 4, 4, 4, 4, 2
+  for (int n : {1, 2, 3, 4, 8}) {
+    std::vector<int> owners(count, 0);
+    for (int r = 0; r < n; ++r) {
+      NamedRank g(r, n);
+      Trainer t(*m, o, Normaliser::fit(train, false), g);
+      const std::vector<bool> need = t.samples_needed(count);
+      REQUIRE(need.size() == count);
+      std::size_t mine = 0;
+      for (std::size_t i = 0; i < count; ++i) owners[i] += need[i], mine += need[i];
+      // Its shares (at most ⌈4/n⌉ of each batch), plus one placeholder per batch it has none of.
+      CHECK(mine <= 6 * std::size_t((4 + n - 1) / n));
+    }
+    for (std::size_t i = 0; i < count; ++i) CHECK(owners[i] >= 1);
+    if (n == 1) CHECK(std::count(owners.begin(), owners.end(), 1) == std::ptrdiff_t(count));
+  }
+}

@@ -262,8 +262,8 @@ int gat::cmd_train(int argc, char** argv) {
   }
   int geodesic_k = 1;
   for (int k : model->pool_sizes()) geodesic_k = std::max(geodesic_k, k);
-  const auto data_samples = [&](character::DatasetPart part, int epoch) {
-    return character::training_samples(*td, cfg.task, part, epoch, geodesic_k, int(samples));
+  const auto data_samples = [&](character::DatasetPart part, int epoch, const character::SampleFilter& build = {}) {
+    return character::training_samples(*td, cfg.task, part, epoch, geodesic_k, int(samples), build);
   };
   std::vector<Sample> train = td ? data_samples(character::DatasetPart::train, 0)
                                  : demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed) * 2 + 1);
@@ -345,8 +345,14 @@ int gat::cmd_train(int argc, char** argv) {
   while (trainer.epoch() < epochs) {
     // Displacement datasets: the random poses and windows of this epoch
     // (deterministic per seed and epoch, so a resumed run sees the same).
-    if (td && cfg.task == Task::displacement && trainer.epoch() > 0)
-      train = data_samples(character::DatasetPart::train, trainer.epoch());
+    // Data parallel: each rank builds only the samples of its shares.
+    if (td && cfg.task == Task::displacement && trainer.epoch() > 0) {
+      std::vector<bool> need;
+      train = data_samples(character::DatasetPart::train, trainer.epoch(), [&](std::size_t i, std::size_t n) {
+        if (need.size() != n) need = trainer.samples_needed(n);
+        return bool(need[i]);
+      });
+    }
     const auto te = std::chrono::steady_clock::now();
     const auto progress = [&](int e, std::int64_t b, std::int64_t nb, double loss) {
       maybe_inject_fault(comm.rank(), trainer.optimiser().steps());

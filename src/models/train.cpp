@@ -231,6 +231,31 @@ Trainer::Trainer(Model& model, TrainOptions opt, Normaliser norm, dist::Communic
   plateau_.min_lr = opt.min_lr;
 }
 
+namespace {
+// The epoch's order of `count` samples: a seeded Fisher-Yates shuffle.
+std::vector<std::size_t> epoch_order(std::size_t count, nn::Rng& rng) {
+  std::vector<std::size_t> order(count);
+  std::iota(order.begin(), order.end(), 0);
+  for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng.below(i)]);
+  return order;
+}
+}  // namespace
+
+std::vector<bool> Trainer::samples_needed(std::size_t count) const {
+  if (comm_.size() == 1) return std::vector<bool>(count, true);
+  nn::Rng rng = rng_;  // the state run_epoch will start from
+  const std::vector<std::size_t> order = epoch_order(count, rng);
+  const auto bs = std::size_t(std::max(1, opt_.batch_size));
+  std::vector<bool> need(count, false);
+  for (std::size_t b0 = 0; b0 < count; b0 += bs) {
+    const std::size_t n = std::min(bs, count - b0);
+    const dist::Share sh = dist::share_of(n, comm_.rank(), comm_.size());
+    if (sh.empty()) need[order[b0]] = true;  // the placeholder
+    for (std::size_t k = sh.begin; k < sh.end; ++k) need[order[b0 + k]] = true;
+  }
+  return need;
+}
+
 EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vector<Sample>& val,
                               const BatchCallback& on_batch) {
   GATCORE_CHECK(!train.empty(), "Trainer: no training samples");
@@ -239,9 +264,7 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
   const double comm0 = comm_.seconds_in_collectives();
   EpochStats st;
   st.epoch = ++epoch_;
-  std::vector<std::size_t> order(train.size());
-  std::iota(order.begin(), order.end(), 0);
-  for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng_.below(i)]);
+  const std::vector<std::size_t> order = epoch_order(train.size(), rng_);
   const auto bs = std::size_t(std::max(1, opt_.batch_size));
   const std::int64_t nb = std::int64_t((train.size() + bs - 1) / bs);
   const std::vector<int> pools = model_.pool_sizes();

@@ -2,7 +2,8 @@
 # Data-parallel training under mpirun against one process (CTest, tests/CMakeLists.txt).
 #   dist_train.sh equivalence MODEL  the library's Trainer (dist_trainer), 3 steps at 1, 2 and 4 ranks
 #   dist_train.sh resume             gat train: 1 epoch at 2 ranks resumed at 4 (and at 1) = 2 epochs in one process
-#   dist_train.sh eval               gat eval of a skin-weight model on a dataset at 1 and 3 ranks: the same report
+#   dist_train.sh eval               gat eval of a skin-weight model on a dataset at 1 and 3 ranks: the same report;
+#                                    a displacement model on it, 2 epochs (the second's poses built per rank's shares)
 #   dist_train.sh killed             gat train: rank 1 of 4 killed at step 4: the job ends, non-zero, with a
 #                                    message, and the run continues from the last checkpoint
 # The tolerances (why not bitwise: include/gatcore/models/train.hpp, bench/RESULTS.md):
@@ -85,6 +86,17 @@ case "$mode" in
     cat dist_ev3.txt
     grep -q '| \*\*overall\*\* |' dist_ev3.txt
     diff dist_ev1.txt dist_ev3.txt && cmp dist_ev1.json dist_ev3.json
+    # Displacement: epoch 2's random poses are built by each rank for its shares only.
+    dargs="--model densegats --data dist_ev.json --epochs 2 --batch 2 --lr 3e-4 --sample-vertices 100"
+    "$GAT" train $dargs --out dist_evd1.gcm > /dev/null
+    mpi 3 "$GAT" train $dargs --out dist_evd3.gcm > /dev/null
+    echo "== densegats on the dataset, 2 epochs: 1 process vs 3 ranks"
+    cat dist_evd1.loss.csv dist_evd3.loss.csv
+    grep '^[12],' dist_evd1.loss.csv | cut -d, -f1,2 | tr , ' ' > a.loss
+    grep '^[12],' dist_evd3.loss.csv | cut -d, -f1,2 | tr , ' ' > b.loss
+    test "$(wc -l < a.loss)" = 2
+    close a.loss b.loss 1e-4 "epoch train loss"
+    "$DIFF" dist_evd1.gcm dist_evd3.gcm --lr 3e-4 --tol 0.5
     echo eval-ok ;;
   killed)
     args="--model densegats --samples 12 --batch 4 --sample-vertices 64 --seed 3"

@@ -128,6 +128,12 @@ class Trainer {
                        const BatchCallback& on_batch = {});
   // Mean loss over full meshes in eval mode.
   double evaluate(const std::vector<Sample>& samples);
+  // Which of `count` training samples the next run_epoch makes this rank
+  // build a batch from (its shares, and the first sample of a batch it has
+  // no share of); all of them in one process. The others may be stubs that
+  // only carry their graph's vertex count (character::training_samples'
+  // `build`): every rank draws every sample's vertex selection.
+  std::vector<bool> samples_needed(std::size_t count) const;
 
   Model& model() { return model_; }
   Adam& optimiser() { return adam_; }

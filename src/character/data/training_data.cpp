@@ -93,7 +93,8 @@ Tensor to_super_columns(const Tensor& f, const std::vector<std::int32_t>& joint_
 }  // namespace
 
 std::vector<models::Sample> training_samples(const TrainingData& data, models::Task task, DatasetPart part,
-                                             int epoch, int geodesic_k, int max_poses_per_character) {
+                                             int epoch, int geodesic_k, int max_poses_per_character,
+                                             const SampleFilter& build) {
   const auto& chars = data.part(part);
   const std::int32_t B = data.super.num_bones();
   std::vector<models::Sample> out;
@@ -101,15 +102,34 @@ std::vector<models::Sample> training_samples(const TrainingData& data, models::T
     std::vector<SampleTask> tasks = dataset_tasks(data.description, data.characters, data.motions, chars, epoch);
     if (max_poses_per_character > 0)
       std::erase_if(tasks, [&](const SampleTask& t) { return t.pose_index >= max_poses_per_character; });
-    // One shared graph per character when samples cover the whole mesh.
-    stream_densegats_samples(data.characters, tasks, [&](DenseGatsSample&& s) {
-      models::Sample m;
-      m.name = data.description.characters[std::size_t(s.character)] + " pose " + std::to_string(s.pose);
+    const auto name = [&](std::int32_t character, std::int32_t pose) {
+      return data.description.characters[std::size_t(character)] + " pose " + std::to_string(pose);
+    };
+    // The samples not to build: stubs that know their vertex count (make_densegats_sample's window).
+    std::vector<std::size_t> where;  // out index of each task built
+    std::vector<SampleTask> todo;
+    out.resize(tasks.size());
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+      const SampleTask& t = tasks[i];
+      if (!build || build(i, tasks.size())) {
+        where.push_back(i);
+        todo.push_back(t);
+        continue;
+      }
+      const std::int64_t n = data.characters[std::size_t(t.character)].character.mesh.num_vertices();
+      CsrGraph g;
+      g.num_nodes = t.count <= 0 || t.count >= n ? n : t.count;
+      out[i].name = name(t.character, t.pose_index);
+      out[i].graph = share(std::move(g));
+    }
+    std::size_t k = 0;
+    stream_densegats_samples(data.characters, todo, [&](DenseGatsSample&& s) {
+      models::Sample& m = out[where[k++]];
+      m.name = name(s.character, s.pose);
       m.features = densegats_model_features(
           to_super_columns(s.features, data.super.joint_to_bone[std::size_t(s.character)], B), s);
       m.target = std::move(s.target);
       m.graph = share(std::move(s.graph));
-      out.push_back(std::move(m));
     });
     return out;
   }

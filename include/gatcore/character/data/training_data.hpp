@@ -13,6 +13,7 @@
 //  - weights: NeuroSkinning features of the rest mesh, super-skeleton weights,
 //    the bone mask, and geodesic neighbour lists (nearest first, self first).
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -48,11 +49,20 @@ TrainingData load_training_data(const std::string& path);
 // FNV-1a 64 of a file's bytes as 16 hex digits; throws naming the file.
 std::string file_hash(const std::string& path);
 
+// Which samples to build: (index, count of samples) -> build it.
+using SampleFilter = std::function<bool(std::size_t index, std::size_t count)>;
+
 // The samples of one part. displacement: the poses of `epoch`;
 // `max_poses_per_character` > 0 keeps only the first ones of each character.
 // weights: one sample per character with `geodesic_k` neighbours per vertex.
+// `build` (displacement only; data-parallel training, where a rank needs
+// only its shares of the epoch's batches: models::Trainer::samples_needed):
+// the samples it rejects are stubs at their places, with their name and a
+// graph that only knows its vertex count (what batching draws from) and no
+// features or target.
 std::vector<models::Sample> training_samples(const TrainingData& data, models::Task task, DatasetPart part,
-                                             int epoch = 0, int geodesic_k = 64, int max_poses_per_character = 0);
+                                             int epoch = 0, int geodesic_k = 64, int max_poses_per_character = 0,
+                                             const SampleFilter& build = {});
 
 // The displacement-task sample of one character (index into data.characters)
 // in one pose over its whole mesh, for evaluation and inference: features in
