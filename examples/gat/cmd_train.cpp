@@ -23,7 +23,6 @@
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
-#include "gatcore/character/data/training_data.hpp"
 #include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/vulkan.hpp"
