@@ -83,7 +83,7 @@ TEST_CASE("linear_skip: a configuration key, off by default and for configuratio
   CHECK_THROWS_WITH(make_model(w, 1), Catch::Contains("linear_skip needs the displacement task"));
 }
 
-TEST_CASE("linear_skip: the untrained network is the skip; the least-squares fit recovers a linear target") {
+TEST_CASE("linear_skip: the untrained network is the skip, and the least-squares fit recovers a linear target") {
   std::vector<Sample> data = {linear_target(fixtures::wave_sample(8, 6, 0.f)),
                               linear_target(fixtures::wave_sample(7, 6, 0.9f))};
   const Normaliser norm = Normaliser::fit(data, true);
@@ -135,7 +135,7 @@ TEST_CASE("linear_skip: finite-difference gradients through the skip and the res
   CHECK(checked > 30);
 }
 
-TEST_CASE("linear_skip: checkpoints keep the skip; training from the fit ends below the linear fit") {
+TEST_CASE("linear_skip: checkpoints keep the skip, and training from the fit ends below the linear fit") {
   // A nonlinear target of the wave features (fixtures::wave_sample): the
   // linear fit leaves a residual the graph part has to learn.
   std::vector<Sample> data = {fixtures::wave_sample(8, 6, 0.f), fixtures::wave_sample(8, 6, 0.6f),
