@@ -131,7 +131,7 @@ TEST_CASE("arap: a planar strip pulled at both ends stretches uniformly (the ana
     }
 }
 
-TEST_CASE("arap: handles from the dominant weight; components without one get one; bad input is named") {
+TEST_CASE("arap: handles from the dominant weight, a handle for every component, bad input named") {
   std::vector<float> pos;
   std::vector<std::int32_t> tris;
   grid(3, 3, pos, tris);

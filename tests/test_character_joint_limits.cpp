@@ -279,5 +279,8 @@ TEST_CASE("pose_limit_excess: zero within the limits, the overshoot outside them
   Pose moved = rest;
   moved.local[0].rotation = quat_mul(quat_from_axis_angle({0, 1, 0}, 2.0f), rest.local[0].rotation);
   CHECK(pose_limit_excess(ch.skeleton, rest, moved, limits).radians == 0.0f);
+  // Neither does the orientation joint (and its ancestors) when named.
+  CHECK(pose_limit_excess(ch.skeleton, rest, p, limits, j).radians == 0.0f);
+  CHECK(pose_limit_excess(ch.skeleton, rest, p, limits, 0).radians == Approx(0.3f).margin(1e-4));
   CHECK_THROWS_WITH(pose_limit_excess(ch.skeleton, rest, p, {}), Contains("0 limits"));
 }

@@ -9,6 +9,7 @@
 #include "gatcore/models/train.hpp"
 #include "model_fixtures.hpp"
 #include "gradcheck.hpp"
+#include "model_gradcheck.hpp"
 
 using namespace gatcore;
 using namespace gatcore::models;
@@ -142,54 +143,7 @@ TEST_CASE("masked bones get exactly zero probability; top-k renormalises") {
   CHECK(t.at(1, 0) == Approx(0.5));
 }
 
-namespace {
-
-// Finite differences of Σ R⊙forward against backward, for sampled entries
-// of every parameter (training-mode BatchNorm, no dropout).
-void model_gradcheck(Model& m, const Batch& b) {
-  std::mt19937 rng(17);
-  Var y = m.forward(b, true);
-  Tensor R = Tensor::empty(y.rows(), y.cols());
-  std::uniform_real_distribution<float> U(-1.f, 1.f);
-  for (std::int64_t i = 0; i < R.rows(); ++i)
-    for (std::int64_t j = 0; j < R.cols(); ++j) R.at(i, j) = U(rng);
-  backward(sum(mul(y, Var(R))));
-  auto value = [&] {
-    NoGradGuard ng;
-    Tensor v = m.forward(b, true).value();
-    double s = 0;
-    for (std::int64_t i = 0; i < v.rows(); ++i)
-      for (std::int64_t j = 0; j < v.cols(); ++j) s += double(v.at(i, j)) * R.at(i, j);
-    return s;
-  };
-  const float h = 1e-3f;
-  int checked = 0, bad = 0;
-  for (const auto& p : m.registry().params) {
-    const Tensor& x = p.var.value();
-    Tensor g = p.var.grad();
-    REQUIRE(g.defined());
-    for (int t = 0; t < 3; ++t) {
-      const std::int64_t id = std::int64_t(rng() % std::uint64_t(x.numel()));
-      const std::int64_t r = id / x.cols(), c = id % x.cols();
-      const float orig = x.at(r, c);
-      x.at(r, c) = orig + h;
-      const double lp = value();
-      x.at(r, c) = orig - h;
-      const double lm = value();
-      x.at(r, c) = orig;
-      const double fd = (lp - lm) / (2.0 * h), an = g.at(r, c);
-      ++checked;
-      if (std::abs(an - fd) > 1e-2 + 5e-2 * std::max(std::abs(an), std::abs(fd))) {
-        ++bad;
-        UNSCOPED_INFO(p.name << " (" << r << ", " << c << "): analytic " << an << " vs fd " << fd);
-      }
-    }
-  }
-  // float32 central differences through a deep net: allow rare kink hits.
-  CHECK(bad <= checked / 20);
-}
-
-}  // namespace
+using fixtures::model_gradcheck;
 
 TEST_CASE("finite-difference gradients through a reduced DenseGATs and a reduced NeuroSkinning") {
   Sample s = fixtures::wave_sample(6, 5, 0.3f, false);

@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
       std::vector<Worst> frames;
       for (std::size_t f = 0; f < clip.frames.size(); f += std::size_t(stride)) {
         const std::vector<float> lbs = linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, clip.frames[f]));
-        const std::vector<float> ref = pc.reference->deform(lbs, -1);
+        const std::vector<float> ref = (pc.reference ? pc.reference->deform(lbs, -1) : delta_mush_apply(pc.delta_mush, lbs));
         Worst w;
         w.frame = f;
         for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) {
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
                                                  : uniform_limits(ch.skeleton, td.description.pose_angle);
       for (std::size_t k = 0; k < std::min<std::size_t>(5, frames.size()); ++k) {
         const auto [j, w] = dominant(ch.mesh, frames[k].vertex);
-        const LimitExcess ex = pose_limit_excess(ch.skeleton, pc.rest, clip.frames[frames[k].frame], limits);
+        const LimitExcess ex = pose_limit_excess(ch.skeleton, pc.rest, clip.frames[frames[k].frame], limits, pc.norm.origin_joint);
         std::printf("  frame %4zu: max %.2f cm at vertex %lld (dominant joint %s, weight %.2f), %lld vertices above 5 cm;"
                     " pose outside the training limits by %.0f deg (%s, axis %d)\n",
                     frames[k].frame, frames[k].error, static_cast<long long>(frames[k].vertex),
@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
       // The worst frame, front and side, colour scale top = that frame's max.
       const Worst& w = frames.front();
       const std::vector<float> lbs = linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, clip.frames[w.frame]));
-      const std::vector<float> ref = pc.reference->deform(lbs, -1);
+      const std::vector<float> ref = (pc.reference ? pc.reference->deform(lbs, -1) : delta_mush_apply(pc.delta_mush, lbs));
       std::vector<float> err(static_cast<std::size_t>(n));
       for (std::int64_t v = 0; v < n; ++v) {
         double d = 0;

@@ -236,7 +236,7 @@ int gat::eval_motion(const EvalMotionArgs& args) {
         progress.update(done_frames++, character_label(entry));
         const Pose& pose = clip.frames[f];
         if (max_excess_deg >= 0 &&
-            pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits).radians > max_excess_deg * std::numbers::pi / 180.0) {
+            pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits, pc.norm.origin_joint).radians > max_excess_deg * std::numbers::pi / 180.0) {
           ++row.excluded;
           continue;
         }

@@ -214,15 +214,17 @@ std::string joint_limits_json(const JointLimitTable& t) {
 }
 
 LimitExcess pose_limit_excess(const Skeleton& s, const Pose& rest, const Pose& pose,
-                              const std::vector<JointLimit>& limits) {
+                              const std::vector<JointLimit>& limits, std::int32_t orientation_joint) {
   const std::int32_t J = s.num_joints();
   GATCORE_CHECK(static_cast<std::int32_t>(limits.size()) == J && static_cast<std::int32_t>(rest.local.size()) == J &&
                     static_cast<std::int32_t>(pose.local.size()) == J,
                 "pose_limit_excess: ", limits.size(), " limits, ", rest.local.size(), " rest and ", pose.local.size(),
                 " posed transforms for ", J, " joints");
+  std::vector<char> skip(static_cast<std::size_t>(J), 0);
+  for (std::int32_t j = orientation_joint; j >= 0 && j < J; j = s.parents[std::size_t(j)]) skip[std::size_t(j)] = 1;
   LimitExcess worst;
   for (std::int32_t j = 0; j < J; ++j) {
-    if (s.parents[std::size_t(j)] < 0) continue;  // roots carry the motion's root movement
+    if (s.parents[std::size_t(j)] < 0 || skip[std::size_t(j)]) continue;  // roots carry the motion's root movement
     const Quat& r = rest.local[std::size_t(j)].rotation;
     const Quat q = quat_normalize(quat_mul({-r[0], -r[1], -r[2], r[3]}, pose.local[std::size_t(j)].rotation));
     // Rotation matrix of q; R = Rx(a) Ry(b) Rz(c): R02 = sin b, a = atan2(-R12, R22), c = atan2(-R01, R00).

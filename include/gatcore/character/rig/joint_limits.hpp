@@ -40,17 +40,20 @@ struct JointLimitTable {
 };
 
 // How far a pose lies outside per-joint limits (radians, as limits_for gives
-// them): each non-root joint's rotation relative to `rest` decomposed as
-// Euler XYZ (rest * Rx Ry Rz, random_pose's convention), the largest amount
-// by which an angle leaves [lo, hi]; 0 inside the limits. The evaluation's
-// rule for poses the training never covered (gat eval --max-limit-excess).
+// them): each joint's rotation relative to `rest` decomposed as Euler XYZ
+// (rest * Rx Ry Rz, random_pose's convention), the largest amount by which
+// an angle leaves [lo, hi]; 0 inside the limits. Roots, and
+// `orientation_joint` with its ancestors (the hips of a retargeted motion:
+// they carry the character's turning and leaning, which the root frame of
+// the features removes), are not checked. The evaluation's rule for poses
+// the training never covered (gat eval --max-limit-excess).
 struct LimitExcess {
   float radians = 0.0f;
   std::int32_t joint = -1;  // the joint with the largest excess (-1: none)
   int axis = -1;
 };
 LimitExcess pose_limit_excess(const Skeleton& s, const Pose& rest, const Pose& pose,
-                              const std::vector<JointLimit>& limits);
+                              const std::vector<JointLimit>& limits, std::int32_t orientation_joint = -1);
 
 // Glob match ('*', '?') of a whole string.
 bool glob_match(const std::string& pattern, const std::string& text);
