@@ -1,9 +1,12 @@
 // runtime::Deformer: gat deform's per-frame computation (corrective.cpp's
-// deform_frame over make_densegats_sample) with every rest-pose quantity
+// deform_frame over frame_features.hpp's pose_frame and feature functions)
+// with every rest-pose quantity
 // computed at bind() and every per-frame buffer allocated there too. Each
 // step below calls the same library function (or its into-buffer overload)
-// with the same arguments in the same order as make_densegats_sample, which
-// is what keeps the numbers bitwise equal (test_runtime).
+// with the same arguments in the same order as pose_frame /
+// densegats_frame_features / distortion_frame_features, which
+// is what keeps the numbers bitwise equal (test_runtime); those return new
+// vectors, these write into the buffers allocated at bind.
 #include "gatcore/runtime.hpp"
 
 #include <chrono>
@@ -11,10 +14,11 @@
 #include <mutex>
 
 #include "gatcore/character/inference/character_model.hpp"
-#include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/features/features.hpp"
+#include "gatcore/character/features/frame_features.hpp"
+#include "gatcore/character/features/prepared_character.hpp"
 #include "gatcore/character/rig/parallel.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
@@ -158,7 +162,7 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
   if (device() != Device::cpu) device_lock = std::unique_lock<std::mutex>(device_mutex());
   const auto t0 = std::chrono::steady_clock::now();
 
-  // make_densegats_sample (whole mesh, no target), step by step.
+  // pose_frame, step by step.
   for (std::int32_t j = 0; j < b.J; ++j) {
     std::copy_n(joint_globals.data() + 16 * j, 16, b.g[std::size_t(j)].begin());
     b.skin[std::size_t(j)] = mul(b.g[std::size_t(j)], pc.character.skeleton.inverse_bind[std::size_t(j)]);
@@ -180,7 +184,7 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
   for (std::int32_t j = 0; j < b.J; ++j)
     b.joints[std::size_t(j)] =
         apply_normalisation(pc.norm, transform_point(to_root, mat4_translation(b.g[std::size_t(j)])));
-  densegats_features(b.lbs_root, b.normals, b.joints, b.features);
+  densegats_features(b.lbs_root, b.normals, b.joints, b.features);  // densegats_frame_features, whole mesh
 
   // The model's input: features_in_bone_order, then the distortion columns
   // (densegats_model_features).
@@ -195,7 +199,7 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
       if (b.mapping.joint_to_bone[std::size_t(j)] >= 0) dst[6 + b.mapping.joint_to_bone[std::size_t(j)]] = src[6 + j];
   }
   if (!pc.distortion_scales.empty()) {
-    // detail_halves: posed details of the root-frame LBS mesh; rest details
+    // distortion_frame_features / detail_halves: posed details of the root-frame LBS mesh; rest details
     // carried by the skinning, turned into the root frame and normalised.
     laplacian_details(pc.delta_mush, b.lbs_root, pc.distortion_scales, b.posed_spans, b.smoothed, b.scratch);
     for (std::size_t k = 0; k < pc.rest_details.size(); ++k) {
@@ -219,12 +223,9 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
   // deform_frame: normalised units back to the character's; the model
   // predicts in the root frame (root_offset_to_world).
   const float inv = 1.0f / pc.norm.scale;
-  const Mat4& m = root_motion;
   std::int64_t bad = -1;
   for (std::int64_t v = 0; v < n; ++v) {
-    const float d0 = y.at(v, 0), d1 = y.at(v, 1), d2 = y.at(v, 2);
-    const Vec3 o = {m[0] * d0 + m[4] * d1 + m[8] * d2, m[1] * d0 + m[5] * d1 + m[9] * d2,
-                    m[2] * d0 + m[6] * d1 + m[10] * d2};
+    const Vec3 o = root_offset_to_world(root_motion, {y.at(v, 0), y.at(v, 1), y.at(v, 2)});
     for (int c = 0; c < 3; ++c) {
       const float l = b.lbs_norm[std::size_t(3 * v + c)] * inv + pc.norm.origin[std::size_t(c)];
       const float off = o[std::size_t(c)] * inv;
