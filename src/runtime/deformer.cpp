@@ -1,9 +1,12 @@
 // runtime::Deformer: gat deform's per-frame computation (corrective.cpp's
-// deform_frame over make_densegats_sample) with every rest-pose quantity
-// computed at bind() and every per-frame buffer allocated there too. Each
-// step below calls the same library function (or its into-buffer overload)
-// with the same arguments in the same order as make_densegats_sample, which
-// is what keeps the numbers bitwise equal (test_runtime).
+// deform_frame: frame_features.hpp's pose_frame and feature functions) with
+// every rest-pose quantity computed at bind() and every per-frame buffer
+// allocated there too. pose_frame is shared (its into-buffer overload); the
+// feature columns call the same functions (their into-buffer overloads) in
+// the same order as densegats_frame_features / distortion_frame_features /
+// features_in_bone_order, which keeps the numbers bitwise equal
+// (test_runtime); those return new tensors, these write into the model's
+// input buffer.
 #include "gatcore/runtime.hpp"
 
 #include <chrono>
@@ -11,10 +14,11 @@
 #include <mutex>
 
 #include "gatcore/character/inference/character_model.hpp"
-#include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/features/features.hpp"
+#include "gatcore/character/features/frame_features.hpp"
+#include "gatcore/character/features/prepared_character.hpp"
 #include "gatcore/character/rig/parallel.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
@@ -53,12 +57,12 @@ struct Deformer::Bound {
   PreparedCharacter pc;  // world frame (as gat deform)
   BoneMapping mapping;
   std::int64_t n = 0;
-  std::int32_t J = 0, root = 0;
+  std::int32_t J = 0;
   Mat4 inv_rest_root = mat4_identity();
   // Per-frame buffers.
-  std::vector<Mat4> g, skin;
-  std::vector<Vec3> joints;
-  std::vector<float> lbs_world, lbs_norm, lbs_root, normals, smoothed, scratch, rest_skinned;
+  std::vector<Mat4> g;
+  PosedFrame frame;  // pose_frame's result, its vectors sized at bind
+  std::vector<float> smoothed, scratch, rest_skinned;
   std::vector<double> acc;
   std::vector<std::vector<float>> posed_details;
   std::vector<std::span<float>> posed_spans;
@@ -110,15 +114,13 @@ void Deformer::bind(const Mesh& rest, const Skeleton& skeleton, const BindOption
                 " features (bones and distortion scales) for a model that takes ", cfg.in_dim);
   b->n = ch.mesh.num_vertices();
   b->J = ch.skeleton.num_joints();
-  b->root = root_motion_joint(b->pc);
-  b->inv_rest_root = inverse(global_transforms(b->pc.character.skeleton, b->pc.rest)[std::size_t(b->root)]);
+  b->inv_rest_root = rest_root_inverse(b->pc);
   const std::size_t n3 = std::size_t(3 * b->n);
   b->g.resize(std::size_t(b->J));
-  b->skin.resize(std::size_t(b->J));
-  b->joints.resize(std::size_t(b->J));
-  for (auto* v : {&b->lbs_world, &b->lbs_norm, &b->lbs_root, &b->normals, &b->smoothed, &b->scratch, &b->rest_skinned})
-    v->resize(n3);
+  for (auto* v : {&b->smoothed, &b->scratch, &b->rest_skinned}) v->resize(n3);
   b->acc.resize(n3);
+  pose_frame(b->pc, b->g = global_transforms(b->pc.character.skeleton, b->pc.rest), b->inv_rest_root, b->frame,
+             b->acc);  // sizes every vector of the frame
   b->posed_details.assign(std::size_t(S), std::vector<float>(n3));
   b->posed_spans.assign(b->posed_details.begin(), b->posed_details.end());
   b->features = Tensor::empty(b->n, 6 + b->J);
@@ -158,29 +160,12 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
   if (device() != Device::cpu) device_lock = std::unique_lock<std::mutex>(device_mutex());
   const auto t0 = std::chrono::steady_clock::now();
 
-  // make_densegats_sample (whole mesh, no target), step by step.
-  for (std::int32_t j = 0; j < b.J; ++j) {
-    std::copy_n(joint_globals.data() + 16 * j, 16, b.g[std::size_t(j)].begin());
-    b.skin[std::size_t(j)] = mul(b.g[std::size_t(j)], pc.character.skeleton.inverse_bind[std::size_t(j)]);
-  }
-  linear_blend_skinning(mesh, b.skin, b.lbs_world);
-  apply_normalisation(pc.norm, b.lbs_world, b.lbs_norm);
-  Transform motion = to_transform(mul(b.g[std::size_t(b.root)], b.inv_rest_root));
-  motion.scale = {1.0f, 1.0f, 1.0f};
-  const Mat4 root_motion = to_matrix(motion);
-  const Mat4 to_root = inverse(root_motion);
+  for (std::int32_t j = 0; j < b.J; ++j) std::copy_n(joint_globals.data() + 16 * j, 16, b.g[std::size_t(j)].begin());
+  PosedFrame& fr = b.frame;
+  pose_frame(pc, b.g, b.inv_rest_root, fr, b.acc);
+  const Mat4& to_root = fr.to_root;
   const std::int64_t n = b.n;
-#pragma omp parallel for schedule(static) if (!SerialRegion::active())
-  for (std::int64_t v = 0; v < n; ++v) {
-    const Vec3 q = transform_point(to_root, {b.lbs_world[3 * v], b.lbs_world[3 * v + 1], b.lbs_world[3 * v + 2]});
-    const Vec3 r = apply_normalisation(pc.norm, q);
-    for (int c = 0; c < 3; ++c) b.lbs_root[3 * v + c] = r[std::size_t(c)];
-  }
-  vertex_normals(b.lbs_root, mesh.triangles, b.normals, b.acc);
-  for (std::int32_t j = 0; j < b.J; ++j)
-    b.joints[std::size_t(j)] =
-        apply_normalisation(pc.norm, transform_point(to_root, mat4_translation(b.g[std::size_t(j)])));
-  densegats_features(b.lbs_root, b.normals, b.joints, b.features);
+  densegats_features(fr.lbs_root, fr.normals, fr.joints, b.features);  // densegats_frame_features, whole mesh
 
   // The model's input: features_in_bone_order, then the distortion columns
   // (densegats_model_features).
@@ -195,11 +180,11 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
       if (b.mapping.joint_to_bone[std::size_t(j)] >= 0) dst[6 + b.mapping.joint_to_bone[std::size_t(j)]] = src[6 + j];
   }
   if (!pc.distortion_scales.empty()) {
-    // detail_halves: posed details of the root-frame LBS mesh; rest details
+    // distortion_frame_features / detail_halves: posed details of the root-frame LBS mesh; rest details
     // carried by the skinning, turned into the root frame and normalised.
-    laplacian_details(pc.delta_mush, b.lbs_root, pc.distortion_scales, b.posed_spans, b.smoothed, b.scratch);
+    laplacian_details(pc.delta_mush, fr.lbs_root, pc.distortion_scales, b.posed_spans, b.smoothed, b.scratch);
     for (std::size_t k = 0; k < pc.rest_details.size(); ++k) {
-      skin_vectors(mesh, b.skin, pc.rest_details[k], b.rest_skinned);
+      skin_vectors(mesh, fr.skinning, pc.rest_details[k], b.rest_skinned);
       const std::vector<float>& posed = b.posed_details[k];
       for (std::int64_t v = 0; v < n; ++v) {
         const float* a = &b.rest_skinned[std::size_t(3 * v)];
@@ -219,14 +204,11 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
   // deform_frame: normalised units back to the character's; the model
   // predicts in the root frame (root_offset_to_world).
   const float inv = 1.0f / pc.norm.scale;
-  const Mat4& m = root_motion;
   std::int64_t bad = -1;
   for (std::int64_t v = 0; v < n; ++v) {
-    const float d0 = y.at(v, 0), d1 = y.at(v, 1), d2 = y.at(v, 2);
-    const Vec3 o = {m[0] * d0 + m[4] * d1 + m[8] * d2, m[1] * d0 + m[5] * d1 + m[9] * d2,
-                    m[2] * d0 + m[6] * d1 + m[10] * d2};
+    const Vec3 o = root_offset_to_world(fr.root_motion, {y.at(v, 0), y.at(v, 1), y.at(v, 2)});
     for (int c = 0; c < 3; ++c) {
-      const float l = b.lbs_norm[std::size_t(3 * v + c)] * inv + pc.norm.origin[std::size_t(c)];
+      const float l = fr.lbs[std::size_t(3 * v + c)] * inv + pc.norm.origin[std::size_t(c)];
       const float off = o[std::size_t(c)] * inv;
       if (!std::isfinite(off) && bad < 0) bad = v;
       if (!out_lbs.empty()) out_lbs[std::size_t(3 * v + c)] = l;

@@ -2,6 +2,7 @@
 
 #include <numeric>
 
+#include "gatcore/character/rig/parallel.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -21,28 +22,49 @@ std::vector<float> to_root_frame(const PreparedCharacter& pc, const PosedFrame& 
   return apply_normalisation(pc.norm, out);
 }
 
+Mat4 rest_root_inverse(const PreparedCharacter& pc) {
+  return inverse(global_transforms(pc.character.skeleton, pc.rest)[std::size_t(root_motion_joint(pc))]);
+}
+
 PosedFrame pose_frame(const PreparedCharacter& pc, const Pose& pose) {
-  const Character& ch = pc.character;
   PosedFrame f;
-  const std::vector<Mat4> g = global_transforms(ch.skeleton, pose);
-  f.skinning.resize(g.size());
-  for (std::size_t j = 0; j < g.size(); ++j) f.skinning[j] = mul(g[j], ch.skeleton.inverse_bind[j]);
-  f.lbs_world = linear_blend_skinning(ch.mesh, f.skinning);
-  f.lbs = apply_normalisation(pc.norm, f.lbs_world);
+  std::vector<double> scratch(pc.character.mesh.positions.size());
+  pose_frame(pc, global_transforms(pc.character.skeleton, pose), rest_root_inverse(pc), f, scratch);
+  return f;
+}
+
+void pose_frame(const PreparedCharacter& pc, std::span<const Mat4> g, const Mat4& inv_rest_root, PosedFrame& f,
+                std::span<double> normals_scratch) {
+  const Character& ch = pc.character;
+  const std::size_t J = ch.skeleton.inverse_bind.size(), n3 = ch.mesh.positions.size();
+  GATCORE_CHECK(g.size() == J, ch.name, ": ", g.size(), " joint transforms for ", J, " joints");
+  f.skinning.resize(J);
+  for (std::size_t j = 0; j < J; ++j) f.skinning[j] = mul(g[j], ch.skeleton.inverse_bind[j]);
+  f.lbs_world.resize(n3);
+  linear_blend_skinning(ch.mesh, f.skinning, f.lbs_world);
+  f.lbs.resize(n3);
+  apply_normalisation(pc.norm, f.lbs_world, f.lbs);
 
   // The root frame: undo the root's motion (rigid; the root's rest placement
   // is where training poses keep it).
-  const std::int32_t r = root_motion_joint(pc);
-  const std::vector<Mat4> g_rest = global_transforms(ch.skeleton, pc.rest);
-  Transform motion = to_transform(mul(g[std::size_t(r)], inverse(g_rest[std::size_t(r)])));
+  Transform motion = to_transform(mul(g[std::size_t(root_motion_joint(pc))], inv_rest_root));
   motion.scale = {1.0f, 1.0f, 1.0f};  // rigid: offsets keep their length
   f.root_motion = to_matrix(motion);
   f.to_root = inverse(f.root_motion);
-  f.lbs_root = to_root_frame(pc, f, f.lbs_world);
-  f.normals = vertex_normals(f.lbs_root, ch.mesh.triangles);
-  f.joints = joint_positions(g);
-  for (Vec3& j : f.joints) j = apply_normalisation(pc.norm, transform_point(f.to_root, j));
-  return f;
+  // to_root_frame, into f.lbs_root.
+  f.lbs_root.resize(n3);
+  const std::int64_t n = static_cast<std::int64_t>(n3 / 3);
+  const float* w = f.lbs_world.data();
+#pragma omp parallel for schedule(static) if (!SerialRegion::active())
+  for (std::int64_t v = 0; v < n; ++v) {
+    const Vec3 q = apply_normalisation(pc.norm, transform_point(f.to_root, {w[3 * v], w[3 * v + 1], w[3 * v + 2]}));
+    for (int c = 0; c < 3; ++c) f.lbs_root[std::size_t(3 * v + c)] = q[std::size_t(c)];
+  }
+  f.normals.resize(n3);
+  vertex_normals(f.lbs_root, ch.mesh.triangles, f.normals, normals_scratch);
+  f.joints.resize(J);
+  for (std::size_t j = 0; j < J; ++j)
+    f.joints[j] = apply_normalisation(pc.norm, transform_point(f.to_root, mat4_translation(g[j])));
 }
 
 namespace {

@@ -31,6 +31,14 @@ struct PosedFrame {
   std::vector<Vec3> joints;              // joint positions, root frame, normalised
 };
 PosedFrame pose_frame(const PreparedCharacter& pc, const Pose& pose);
+// The same into `f` from the joints' global transforms (global_transforms
+// of the pose): f's vectors are resized, so once they have the character's
+// sizes nothing is allocated (the runtime's per-frame path, runtime.hpp).
+// `inv_rest_root` = rest_root_inverse(pc); `normals_scratch`: [3 n].
+void pose_frame(const PreparedCharacter& pc, std::span<const Mat4> globals, const Mat4& inv_rest_root, PosedFrame& f,
+                std::span<double> normals_scratch);
+// Inverse of the root-motion joint's global transform in the rest pose.
+Mat4 rest_root_inverse(const PreparedCharacter& pc);
 // A world-frame position (lbs_world, or a deformer's output) in the root frame, normalised.
 std::vector<float> to_root_frame(const PreparedCharacter& pc, const PosedFrame& f, std::span<const float> world);
 
