@@ -4,6 +4,8 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+
+#include <unistd.h>
 #include <fstream>
 #include <set>
 
@@ -17,7 +19,10 @@ using namespace gatcore::models;
 namespace {
 
 std::string temp_dir() {
-  const auto dir = std::filesystem::temp_directory_path() / "gatcore_training_data_tests";
+  // One folder per process: ctest -j runs this binary's test cases as
+  // separate processes at once, and they write files of the same names.
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("gatcore_training_data_tests_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   return dir.string();
 }

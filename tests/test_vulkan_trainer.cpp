@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <unistd.h>
+
 #include "gatcore/models/checkpoint.hpp"
 #include "model_fixtures.hpp"
 #include "vulkan_test_util.hpp"
@@ -168,7 +170,9 @@ TEST_CASE("vulkan trainer: Ori.GAT trains like the CPU", "[vulkan]") {
 TEST_CASE("vulkan trainer: checkpoints from the device resume on it and evaluate like the CPU", "[vulkan]") {
   if (!vkt::ready()) return;
   const ModelConfig c = reduced("densegats");
-  const auto path = (std::filesystem::temp_directory_path() / "gatcore_vk_trainer.gcm").string();
+  const auto path = (std::filesystem::temp_directory_path() /
+                     ("gatcore_vk_trainer_" + std::to_string(::getpid()) + ".gcm"))  // ctest -j: one per process
+                        .string();
   const Run vk = train(c, Device::vulkan, 2, path);
   LoadedModel l = load_checkpoint(path);
   for (std::size_t k = 0; k < vk.params.size(); ++k)

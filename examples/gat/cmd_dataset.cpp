@@ -81,10 +81,16 @@ struct BuildArgs {
 // given after each (CLI11 keeps each option's values apart; the parse order
 // says which --target they follow).
 void collect_targets(CLI::App& cmd, BuildArgs& b) {
-  std::size_t first = 0, anim = 0;
+  std::size_t first = 0, anim = 0, target_entries = 0, seen = 0;
+  // CLI11 (2.1) lists an option in parse_order() once per value it took:
+  // 3 entries per --target.
+  for (const CLI::Option* o : cmd.parse_order()) target_entries += o->get_name() == "--target";
+  const std::size_t occurrences = b.target_values.size() / 3;
+  const std::size_t per = occurrences ? std::max<std::size_t>(1, target_entries / occurrences) : 1;
   for (const CLI::Option* o : cmd.parse_order()) {
     const std::string name = o->get_name();
     if (name == "--target") {
+      if (seen++ % per) continue;  // the same occurrence's next value
       const std::size_t t = b.targets.size();
       BuildArgs::TargetArg ta;
       ta.character = b.target_values.at(3 * t);
@@ -307,7 +313,7 @@ Runner setup_dataset(CLI::App& gat) {
     if (build_cmd.parsed()) {
       collect_targets(build_cmd, *b);
       if (b->inputs.empty() && b->targets.empty())
-        throw gatcore::InvalidArgument("CHARACTER: give at least one character (or a --target)");
+        throw CLI::RequiredError("CHARACTER");  // (a --target stands in for it)
       return build(*b);
     }
     if (xc.parsed()) return export_character(*entry, *out);

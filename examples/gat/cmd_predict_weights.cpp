@@ -38,9 +38,10 @@ struct PredictArgs {
 int run(const PredictArgs& a) {
   const bool heat = a.method == "bone-heat";
   const std::size_t want = heat ? 1 : 2;
-  GATCORE_CHECK(a.positional.size() == want, heat ? "--method bone-heat takes CHARACTER only (no MODEL)"
-                                                  : "MODEL and CHARACTER are required", " (got ",
-                a.positional.size(), " argument", a.positional.size() == 1 ? "" : "s", ")");
+  // Checked here rather than by CLI11: MODEL is absent with --method bone-heat.
+  if (a.positional.size() < want) throw CLI::RequiredError(a.positional.empty() && !heat ? "MODEL" : "CHARACTER");
+  if (a.positional.size() > want) throw CLI::ExtrasError({a.positional.back()});
+  if (a.out.empty()) throw CLI::RequiredError("--out");
   const std::string model_path = heat ? std::string() : a.positional[0], in = a.positional.back(), &out = a.out;
   const long k = a.k;
   const double min_weight = a.min_weight;
@@ -112,7 +113,7 @@ Runner setup_predict_weights(CLI::App& gat) {
                 "normalised name (\"LeftArm\" = \"Arm.L\" = \"arm.l\"); joints without a match get no weight.");
   c.add_option("MODEL CHARACTER", a->positional,
                "a skin-weight checkpoint (.gcm; not with --method bone-heat) and the character (.glb / .gltf)")
-      ->required()->expected(1, 2);
+      ->expected(1, 2);
   c.add_option("--method", a->method,
                "model (default) or bone-heat: Baran & Popovic's heat diffusion from the nearest visible bone "
                "(Blender's automatic weights), on any skeleton, no model")
@@ -121,7 +122,7 @@ Runner setup_predict_weights(CLI::App& gat) {
                "drop influences below W of the vertex's total, renormalise (default 0 for a model, 0.01 for bone "
                "heat; artists often use about 2 influences)")
       ->check(number_in(0, 0.999));
-  add_out(c, a->out, "the character with the predicted weights (.glb / .gltf)")->required();
+  add_out(c, a->out, "the character with the predicted weights (.glb / .gltf; required)");
   c.add_option("--max-influences", a->k,
                "bones kept per vertex, renormalised (4: what engines expect; more are written as "
                "JOINTS_1/WEIGHTS_1, ...)")

@@ -131,6 +131,12 @@ int main(int argc, char** argv) {
     for (const CLI::App* s : cmd->get_subcommands()) path += " " + s->get_name();
     try {
       return run();
+    } catch (const CLI::ParseError& e) {
+      // An argument checked after parsing (one that depends on another, e.g.
+      // CHARACTER, which --target can stand in for): the same line and exit
+      // code as CLI11's own checks.
+      fail(path, std::string(e.what()) + " (see gat help " + cmd->get_name() + ")");
+      return 2;
     } catch (const std::exception& e) {
       // One of several MPI ranks: end them all (they may be waiting for this
       // one in a collective), naming the rank.
