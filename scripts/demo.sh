@@ -11,8 +11,8 @@
 #      animation and Blender-ready point caches,
 #   5. pictures: the weight error of the unseen character (gat eval --errormaps)
 #      and where plain skinning departs from the reference deformer (gat errormap),
-# and prints where the files are. About 5 minutes on 2 cores after the build.
-# Usage: bash scripts/demo.sh [--out DIR] [--minutes M (per model, default 1.5)]
+# and prints where the files are. About 4 minutes on a quiet 2-core machine after the build (the two --minutes budgets, 24 deformed frames at ~2.5 s each, loading).
+# Usage: bash scripts/demo.sh [--out DIR] [--minutes M (per model, default 1)]
 # (`gat demo` is the kernels' smoke test: build/examples/gat demo.)
 set -euo pipefail
 
@@ -20,7 +20,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 build="build"
 out="demo-out"
-minutes=1.5
+minutes=1
 while (($#)); do
   case "$1" in
     --out) out="${2:?--out needs a directory}"; shift 2 ;;
@@ -58,13 +58,13 @@ step "3. skin weights of the unseen character procedural:humanoid:42"
 "$gat" predict-weights skin_weights.gcm character.glb -o character_weights.glb
 
 step "4. a procedural motion on it, with the learned corrections"
-"$gat" dataset export-motion procedural:swing:48 -o swing.bvh
+"$gat" dataset export-motion procedural:swing -o swing.bvh
 "$gat" deform corrective.gcm character_weights.glb swing.bvh -o character_deformed.glb \
   --point-cache character_deformed.pc2 --up z --start-frame 1
 
 step "5. pictures"
 "$gat" eval --model skin_weights.gcm --data dataset.json --poses 4 --errormaps img | tail -n 4
-"$gat" errormap character_weights.glb -o img/lbs_vs_delta_mush.png --motion swing.bvh --frame 24
+"$gat" errormap character_weights.glb -o img/lbs_vs_delta_mush.png --motion swing.bvh --frame 12
 
 echo
 echo "demo finished in $(( $(date +%s) - t0 )) s (after the build). Files in $(pwd):"

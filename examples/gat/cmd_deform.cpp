@@ -57,6 +57,7 @@ int run(const DeformArgs& a) {
   }
   apply_threads(a.common);
   const Device dev = device_from_flag(a.common.device, "deform");
+  Activity doing("deforming " + in + " with " + model_path);
   models::LoadedModel lm = models::load_checkpoint(model_path);
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::displacement);
   const Character ch = load_character(in);

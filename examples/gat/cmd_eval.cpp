@@ -151,6 +151,7 @@ int run_eval(const EvalArgs& a) {
   const std::string part = a.part, json_path = a.json_path, errormap_dir = a.errormap_dir;
   const long samples = a.samples, seed = a.seed, poses = a.poses, size = a.size;
   const Device dev = gat::device_from_flag(a.common.device, "eval");
+  gat::Activity doing("evaluating " + path);
   LoadedModel l = load_checkpoint(path);
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
@@ -159,7 +160,10 @@ int run_eval(const EvalArgs& a) {
   std::vector<Sample> samples_;
   std::unique_ptr<character::TrainingData> td_;
   if (!data.empty()) {
-    td_ = std::make_unique<character::TrainingData>(character::load_training_data(data));
+    {
+      gat::Progress loading("preparing the characters of " + data, 0, "characters", a.common.quiet);
+      td_ = std::make_unique<character::TrainingData>(character::load_training_data(data, loading.callback()));
+    }
     const character::TrainingData& td = *td_;
     if (md.count("data_hash") && md.at("data_hash") != td.hash && md.count("data_path") && md.at("data_path") == data)
       std::fprintf(stderr, "gat eval: warning: %s has changed since %s was trained on it\n", data.c_str(), path.c_str());
@@ -177,7 +181,9 @@ int run_eval(const EvalArgs& a) {
                    : part == "validation" ? character::DatasetPart::validation : character::DatasetPart::train;
     int k = 1;
     for (int j : m.pool_sizes()) k = std::max(k, j);
-    samples_ = character::training_samples(td, cfg.task, p, 0, k, int(samples));
+    gat::Progress making("making " + part + " samples", 0, "samples", a.common.quiet);
+    samples_ = character::training_samples(td, cfg.task, p, 0, k, int(samples), {}, making.callback());
+    making.finish();
     if (samples_.empty()) {
       std::fprintf(stderr, "gat eval: %s has no %s characters\n", data.c_str(), part.c_str());
       return 2;
@@ -273,8 +279,8 @@ int run_eval(const EvalArgs& a) {
       for (std::size_t i = 0; i < data_.size(); ++i) {
         progress.update(std::int64_t(i), std::filesystem::path(data_[i].name).stem().string());
         const std::int32_t c = chars[i];
-        per[i].name = std::filesystem::path(data_[i].name).parent_path().filename().string() + "/" +
-                      std::filesystem::path(data_[i].name).stem().string();
+        const std::string dir = std::filesystem::path(data_[i].name).parent_path().filename().string();
+        per[i].name = (dir.empty() ? "" : dir + "/") + std::filesystem::path(data_[i].name).stem().string();
         if (!mine(i)) continue;
         const Tensor y = predictions[i].contiguous() ? predictions[i] : predictions[i].clone();
         const Tensor t = data_[i].target.contiguous() ? data_[i].target : data_[i].target.clone();
@@ -292,7 +298,8 @@ int run_eval(const EvalArgs& a) {
           ro.max_error = 1.0f;  // L1 weight error in [0, 2]; one scale for every method
           ro.view_dir = {-0.55f, -0.25f, -0.8f};
           std::string file = r.name;
-          std::replace(file.begin(), file.end(), '/', '_');
+          for (char& ch : file)
+            if (ch == '/' || ch == ':') ch = '_';
           const std::string png = (std::filesystem::path(errormap_dir) / (file + ".png")).string();
           character::write_png(png, character::render_error_map(mesh.positions, mesh.triangles, r.vertex_l1, ro));
         }
@@ -313,7 +320,8 @@ int run_eval(const EvalArgs& a) {
         r.dominant = f[10];
         if (!errormap_dir.empty()) {
           std::string file = r.name;
-          std::replace(file.begin(), file.end(), '/', '_');
+          for (char& ch : file)
+            if (ch == '/' || ch == ':') ch = '_';
           std::printf("  error map: %s\n", (std::filesystem::path(errormap_dir) / (file + ".png")).string().c_str());
         }
       }

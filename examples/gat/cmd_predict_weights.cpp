@@ -73,6 +73,7 @@ int run(const PredictArgs& a) {
     return 0;
   }
   const Device dev = device_from_flag(a.common.device, "predict-weights");
+  Activity reading("reading the checkpoint " + model_path);
   models::LoadedModel lm = models::load_checkpoint(model_path);
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::weights);
   const Character ch = load_gltf(in);

@@ -154,6 +154,7 @@ int run_train(TrainArgs a) {
   Normaliser norm;
   LoadedModel loaded;
   if (!resume.empty()) {
+    gat::Activity reading("reading the checkpoint " + resume);
     loaded = load_checkpoint(resume);
     model = std::move(loaded.model);
     norm = loaded.norm;
@@ -176,7 +177,10 @@ int run_train(TrainArgs a) {
   }
   std::unique_ptr<character::TrainingData> td;
   if (!data.empty()) {
-    td = std::make_unique<character::TrainingData>(character::load_training_data(data));
+    {
+      gat::Progress loading("preparing the characters of " + data, 0, "characters", quiet);
+      td = std::make_unique<character::TrainingData>(character::load_training_data(data, loading.callback()));
+    }
     if (resume.empty() && !samples_set) samples = 0;
     if (!resume.empty()) {
       const auto& md = loaded.file.metadata;
@@ -234,7 +238,10 @@ int run_train(TrainArgs a) {
   int geodesic_k = 1;
   for (int k : model->pool_sizes()) geodesic_k = std::max(geodesic_k, k);
   const auto data_samples = [&](character::DatasetPart part, int epoch, const character::SampleFilter& build = {}) {
-    return character::training_samples(*td, cfg.task, part, epoch, geodesic_k, int(samples), build);
+    gat::Progress making(std::string("making ") + (part == character::DatasetPart::train ? "training" : "validation") +
+                             " samples",
+                         0, "samples", quiet);
+    return character::training_samples(*td, cfg.task, part, epoch, geodesic_k, int(samples), build, making.callback());
   };
   std::vector<Sample> train = td ? data_samples(character::DatasetPart::train, 0)
                                  : demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed) * 2 + 1);
@@ -319,6 +326,7 @@ int run_train(TrainArgs a) {
   if (tty) std::fprintf(stderr, "(Ctrl-C stops after the current epoch's checkpoint; twice quits at once)\n");
   const auto t0 = std::chrono::steady_clock::now();
   const int first = trainer.epoch();
+  gat::Activity doing("training " + cfg.name);
   while (trainer.epoch() < epochs) {
     // Displacement datasets: the random poses and windows of this epoch
     // (deterministic per seed and epoch, so a resumed run sees the same).

@@ -127,7 +127,9 @@ int gat::eval_motion(const EvalMotionArgs& args) {
   GATCORE_CHECK(!data.empty(), "--motion / --targets need --data DATASET");
   GATCORE_CHECK(loss_curves.empty() || !map_dir.empty(), "--loss-curve writes into the --errormaps DIR; give one");
   const auto t0 = std::chrono::steady_clock::now();
-  const TrainingData td = load_training_data(data);
+  gat::Progress loading("preparing the characters of " + data, 0, "characters", args.quiet);
+  const TrainingData td = load_training_data(data, loading.callback());
+  loading.finish();
   const std::string bones = joined_bone_names(td.super);
   struct M {
     std::string label, file;

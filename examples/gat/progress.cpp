@@ -21,7 +21,7 @@ std::string hms(double s) {
 bool Progress::enabled(bool quiet) { return !quiet && isatty(fileno(stderr)); }
 
 Progress::Progress(std::string what, std::int64_t total, std::string unit, bool quiet)
-    : what_(std::move(what)), unit_(std::move(unit)), total_(total), draw_(enabled(quiet)),
+    : activity_(what), what_(std::move(what)), unit_(std::move(unit)), total_(total), draw_(enabled(quiet)),
       start_(std::chrono::steady_clock::now()), last_(start_ - std::chrono::seconds(1)) {}
 
 Progress::~Progress() { finish(); }

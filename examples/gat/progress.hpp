@@ -17,6 +17,20 @@
 
 namespace gat {
 
+// RAII: names what the command does until the end of the scope (nested
+// scopes stack). current_activity() is "" outside any.
+class Activity {
+ public:
+  explicit Activity(std::string what);
+  ~Activity();
+  Activity(const Activity&) = delete;
+  Activity& operator=(const Activity&) = delete;
+
+ private:
+  std::string previous_;
+};
+const std::string& current_activity();
+
 class Progress {
  public:
   // `what`: "evaluating test characters"; `unit`: "frames", "characters".
@@ -37,6 +51,7 @@ class Progress {
   static bool enabled(bool quiet);
 
  private:
+  Activity activity_;  // the progress line's `what` is also what an error happened during
   std::string what_, unit_;
   std::int64_t total_;
   bool draw_, drawn_ = false;
@@ -47,18 +62,5 @@ class Progress {
 // "00:01:23".
 std::string hms(double seconds);
 
-// RAII: names what the command does until the end of the scope (nested
-// scopes stack). current_activity() is "" outside any.
-class Activity {
- public:
-  explicit Activity(std::string what);
-  ~Activity();
-  Activity(const Activity&) = delete;
-  Activity& operator=(const Activity&) = delete;
-
- private:
-  std::string previous_;
-};
-const std::string& current_activity();
 
 }  // namespace gat

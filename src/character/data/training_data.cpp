@@ -46,7 +46,7 @@ std::string file_hash(const std::string& path) {
   return b;
 }
 
-TrainingData load_training_data(const std::string& path) {
+TrainingData load_training_data(const std::string& path, const ProgressFn& progress) {
   TrainingData t;
   t.path = path;
   t.description = load_dataset(path);
@@ -55,6 +55,7 @@ TrainingData load_training_data(const std::string& path) {
   GATCORE_CHECK(!d.characters.empty(), path, ": the dataset has no characters");
   for (std::size_t c = 0; c < d.characters.size(); ++c) {
     const std::string& e = d.characters[c];
+    report_progress(progress, std::int64_t(c), std::int64_t(d.characters.size()));
     try {
       const Character file_character = load_dataset_character(e);
       t.characters.push_back(prepare_character(file_character, d.delta_mush, d.distortion_scales));
@@ -66,6 +67,7 @@ TrainingData load_training_data(const std::string& path) {
       throw InvalidArgument(detail::cat(path, ": character '", e, "': ", ex.what()));
     }
   }
+  report_progress(progress, std::int64_t(d.characters.size()), std::int64_t(d.characters.size()));
   for (const std::string& m : d.motions) {
     try {
       t.motions.push_back(load_bvh(m));
@@ -101,7 +103,7 @@ Tensor to_super_columns(const Tensor& f, const std::vector<std::int32_t>& joint_
 
 std::vector<models::Sample> training_samples(const TrainingData& data, models::Task task, DatasetPart part,
                                              int epoch, int geodesic_k, int max_poses_per_character,
-                                             const SampleFilter& build) {
+                                             const SampleFilter& build, const ProgressFn& progress) {
   const auto& chars = data.part(part);
   const std::int32_t B = data.super.num_bones();
   std::vector<models::Sample> out;
@@ -137,11 +139,13 @@ std::vector<models::Sample> training_samples(const TrainingData& data, models::T
           to_super_columns(s.features, data.super.joint_to_bone[std::size_t(s.character)], B), s);
       m.target = std::move(s.target);
       m.graph = share(std::move(s.graph));
+      report_progress(progress, std::int64_t(k), std::int64_t(todo.size()));
     });
     return out;
   }
   GATCORE_CHECK(geodesic_k >= 1, "training_samples: geodesic_k must be >= 1, got ", geodesic_k);
   for (std::int32_t c : chars) {
+    report_progress(progress, std::int64_t(out.size()), std::int64_t(chars.size()));
     const PreparedCharacter& pc = data.characters[std::size_t(c)];
     NeuroSkinningSample s = make_neuroskinning_sample(pc);
     const auto& j2b = data.super.joint_to_bone[std::size_t(c)];

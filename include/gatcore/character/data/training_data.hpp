@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/progress.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/models/config.hpp"
@@ -44,8 +45,9 @@ struct TrainingData {
 };
 
 // Loads the description and every character and motion. Errors name the
-// dataset file (and the entry that failed).
-TrainingData load_training_data(const std::string& path);
+// dataset file (and the entry that failed). `progress`: characters prepared
+// of all (the Delta Mush binding and features make this take seconds each).
+TrainingData load_training_data(const std::string& path, const ProgressFn& progress = {});
 
 // FNV-1a 64 of a file's bytes as 16 hex digits; throws naming the file.
 std::string file_hash(const std::string& path);
@@ -60,10 +62,10 @@ using SampleFilter = std::function<bool(std::size_t index, std::size_t count)>;
 // only its shares of the epoch's batches: models::Trainer::samples_needed):
 // the samples it rejects are stubs at their places, with their name and a
 // graph that only knows its vertex count (what batching draws from) and no
-// features or target.
+// features or target. `progress`: samples made of all.
 std::vector<models::Sample> training_samples(const TrainingData& data, models::Task task, DatasetPart part,
                                              int epoch = 0, int geodesic_k = 64, int max_poses_per_character = 0,
-                                             const SampleFilter& build = {});
+                                             const SampleFilter& build = {}, const ProgressFn& progress = {});
 
 // The displacement-task sample of one character (index into data.characters)
 // in one pose over its whole mesh, for evaluation and inference: features in
