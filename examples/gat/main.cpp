@@ -56,7 +56,8 @@ std::string during() {
 // say in words what failed. gatcore's own errors already name file and value.
 std::string describe(const std::exception& e) {
   const std::string what = e.what();
-  if (dynamic_cast<const gatcore::Error*>(&e)) return what;
+  if (dynamic_cast<const gatcore::Error*>(&e))
+    return what.find("out of memory") != std::string::npos ? what + during() : what;
   if (dynamic_cast<const std::bad_alloc*>(&e))
     return "out of memory" + during() + " (use smaller inputs, fewer --samples / --batch, or more memory)";
   if (dynamic_cast<const std::filesystem::filesystem_error*>(&e)) return "file system error" + during() + ": " + what;

@@ -4,11 +4,15 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <exception>
 
 namespace gat {
 
 namespace {
 std::string g_activity;
+// The innermost activity an exception left (main prints the error after the
+// stack has unwound, when every Activity is gone).
+std::string g_failed_during;
 }
 
 std::string hms(double s) {
@@ -68,8 +72,13 @@ gatcore::ProgressFn Progress::callback() {
   };
 }
 
-Activity::Activity(std::string what) : previous_(std::move(g_activity)) { g_activity = std::move(what); }
-Activity::~Activity() { g_activity = std::move(previous_); }
-const std::string& current_activity() { return g_activity; }
+Activity::Activity(std::string what) : previous_(std::move(g_activity)), uncaught_(std::uncaught_exceptions()) {
+  g_activity = std::move(what);
+}
+Activity::~Activity() {
+  if (std::uncaught_exceptions() > uncaught_ && g_failed_during.empty()) g_failed_during = g_activity;
+  g_activity = std::move(previous_);
+}
+const std::string& current_activity() { return g_failed_during.empty() ? g_activity : g_failed_during; }
 
 }  // namespace gat

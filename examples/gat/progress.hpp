@@ -18,7 +18,8 @@
 namespace gat {
 
 // RAII: names what the command does until the end of the scope (nested
-// scopes stack). current_activity() is "" outside any.
+// scopes stack). current_activity(): the innermost one now, or, once an
+// exception has unwound through some, the innermost it left; "" otherwise.
 class Activity {
  public:
   explicit Activity(std::string what);
@@ -28,6 +29,7 @@ class Activity {
 
  private:
   std::string previous_;
+  int uncaught_;
 };
 const std::string& current_activity();
 

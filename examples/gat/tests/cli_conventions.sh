@@ -45,4 +45,11 @@ check "gat train: --device: expects cpu, vulkan or auto, got 'gpu'" train --devi
 check 'gat train: --epochs: 1 required' train --epochs
 check 'frobnicate' frobnicate
 check "gat help: unknown command 'frobnicate'" help frobnicate
+
+# Out of memory is said in words with what was being done (1.5 GB of address
+# space; a million tube samples need several).
+rc=0
+(ulimit -v 1500000; $g eval --model gat_cli_eq.gcm --samples 1000000 > /dev/null 2> oom.txt) || rc=$?
+[ "$rc" = 1 ] || fail "eval out of memory: exit $rc"
+grep -q 'gat eval: .*out of memory.* while evaluating gat_cli_eq.gcm' oom.txt || fail "out of memory: $(cat oom.txt)"
 echo cli-ok
