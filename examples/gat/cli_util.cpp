@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdlib>
 
+#include "cli_options.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/vulkan.hpp"
 
@@ -39,12 +40,10 @@ void add_alias(gatcore::character::BoneAliases& aliases, const std::string& spec
 }
 
 long parse_int(const std::string& flag, const std::string& v, long lo, long hi) {
-  char* end = nullptr;
-  const long x = std::strtol(v.c_str(), &end, 10);
-  if (v.empty() || *end || x < lo || x > hi)
-    throw gatcore::InvalidArgument(flag + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                                   "], got '" + v + "'");
-  return x;
+  std::string text = v;
+  const std::string err = int_in(lo, hi)(text);  // the options' own check and wording
+  if (!err.empty()) throw gatcore::InvalidArgument(flag + ": " + err);
+  return std::strtol(v.c_str(), nullptr, 10);
 }
 
 }  // namespace gat

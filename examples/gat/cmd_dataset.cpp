@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/data/file_targets.hpp"
@@ -34,12 +35,7 @@ int export_motion(const std::string& entry, const std::string& out) {
     throw gatcore::InvalidArgument("export-motion: unknown motion '" + entry + "' (expected procedural:swing[:FRAMES])");
   int frames = 24;
   if (entry.size() > prefix.size()) {
-    const std::string n = entry.substr(prefix.size() + 1);
-    char* end = nullptr;
-    const long v = std::strtol(n.c_str(), &end, 10);
-    if (n.empty() || *end || v < 1 || v > 100000)
-      throw gatcore::InvalidArgument("export-motion: frames must be an integer in [1, 100000], got '" + n + "'");
-    frames = static_cast<int>(v);
+    frames = static_cast<int>(parse_int("export-motion: frames", entry.substr(prefix.size() + 1), 1, 100000));
   }
   if (std::filesystem::path(out).extension().string() != ".bvh")
     throw gatcore::InvalidArgument(out + ": the output must be a .bvh file");
