@@ -85,9 +85,9 @@ int main(int argc, char** argv) {
     gat::Runner r = c.setup(app);
     runners.emplace_back(app.get_subcommand(c.name), std::move(r));
   }
-  std::string help_topic;
-  CLI::App* help = app.add_subcommand("help", "print the help of a command (gat help CMD) or this list");
-  help->add_option("command", help_topic, "a command's name");
+  std::vector<std::string> help_topic;
+  CLI::App* help = app.add_subcommand("help", "print the help of a command (gat help CMD [SUBCMD]) or this list");
+  help->add_option("command", help_topic, "a command's name (and a subcommand's: gat help dataset build)");
 
   const auto fail = [&](const std::string& who, const std::string& msg) {
     std::fprintf(stderr, "%s: %s\n", who.c_str(), msg.c_str());
@@ -118,13 +118,21 @@ int main(int argc, char** argv) {
       std::cout << app.get_formatter()->make_help(&app, "gat", CLI::AppFormatMode::Normal);
       return 0;
     }
-    for (auto& [cmd, run] : runners)
-      if (cmd->get_name() == help_topic) {
-        std::cout << cmd->help();
-        return 0;
+    const CLI::App* topic = &app;
+    std::string path;
+    for (const std::string& word : help_topic) {
+      path += (path.empty() ? "" : " ") + word;
+      const CLI::App* next = nullptr;
+      for (const CLI::App* sub : topic->get_subcommands({}))
+        if (sub->get_name() == word && sub != help) next = sub;
+      if (!next) {
+        fail("gat help", "unknown command '" + path + "'");
+        return 2;
       }
-    fail("gat help", "unknown command '" + help_topic + "'");
-    return 2;
+      topic = next;
+    }
+    std::cout << topic->help();
+    return 0;
   }
   for (auto& [cmd, run] : runners) {
     if (!cmd->parsed()) continue;
