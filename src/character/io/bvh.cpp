@@ -84,7 +84,8 @@ struct Lexer {
     char* end = nullptr;
     const double v = std::strtod(buf, &end);
     if (end == buf || *end != '\0') fail(detail::cat(what(), ": '", t, "' is not a number"));
-    if (!std::isfinite(v)) fail(detail::cat(what(), ": '", t, "' is not a finite number"));
+    // Values are stored as float: beyond its range is as bad as infinite.
+    if (!std::isfinite(v) || std::abs(v) > 1e30) fail(detail::cat(what(), ": '", t, "' is not a finite number"));
     return v;
   }
   double number(const char* what) {
@@ -201,6 +202,9 @@ Motion parse_bvh(std::string_view text, const std::string& path) {
     s.rest_local.push_back(t);
     s.root_parent.push_back(mat4_identity());
     global[j] = d.parent < 0 ? to_matrix(t) : mul(global[std::size_t(d.parent)], to_matrix(t));
+    const Vec3 at = mat4_translation(global[j]);
+    GATCORE_CHECK(std::isfinite(at[0]) && std::isfinite(at[1]) && std::isfinite(at[2]), path, ": joint '", d.name,
+                  "': its offsets add up past the float range");
     s.inverse_bind.push_back(inverse(global[j]));
   }
   s.validate(path.c_str());
