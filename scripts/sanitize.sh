@@ -18,7 +18,7 @@ build="${GATCORE_ASAN_BUILD:-build-asan}"
 seconds="${GATCORE_FUZZ_SECONDS:-30}"
 mode="${1:-all}"
 
-export ASAN_OPTIONS="detect_leaks=1:strict_init_order=1:detect_stack_use_after_return=0:allocator_may_return_null=0"
+export ASAN_OPTIONS="detect_leaks=1:allocator_may_return_null=0"
 export LSAN_OPTIONS="suppressions=$root/tests/sanitizer/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 
