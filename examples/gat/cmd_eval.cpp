@@ -114,6 +114,11 @@ int gat::cmd_eval(int argc, char** argv) {
   }
   const Device dev = device == "cpu" ? Device::cpu : vulkan::select(device == "auto" ? "auto" : "");
   LoadedModel l = load_checkpoint(path);
+  if (l.model->config().name == "skinweights-any") {
+    // Each character's own joints (no super skeleton): the baselines' protocol.
+    if (data.empty() && l.file.metadata.count("data_path")) data = l.file.metadata.at("data_path");
+    return gat::eval_weight_baseline("skinweights-any", data, part, poses, seed, min_weight, json_path, &l);
+  }
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
   if (part != "test" && part != "validation" && part != "train") {

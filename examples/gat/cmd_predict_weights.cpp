@@ -40,6 +40,7 @@ void usage(std::FILE* f) {
                "                      are written as JOINTS_1/WEIGHTS_1, ...)\n"
                "  --min-weight W      drop influences below W of the vertex's total, renormalise (default 0 for a\n"
                "                      model, 0.01 for bone heat; artists often use about 2 influences)\n"
+               "  skinweights-any checkpoints work on any skeleton (each vertex's own nearest bones; no names).\n"
                "  --method M          model (default) or bone-heat: Baran & Popovic's heat diffusion from the\n"
                "                      nearest visible bone (Blender's automatic weights), on any skeleton, no model\n"
                "  --alias JOINT=BONE  treat the character's joint JOINT as the model's bone BONE (repeatable)\n"
@@ -129,6 +130,27 @@ int cmd_predict_weights(int argc, char** argv) {
   }
   const Device dev = device_from_flag(device, "predict-weights");
   models::LoadedModel lm = models::load_checkpoint(model_path);
+  if (lm.model->config().name == "skinweights-any") {
+    // Skeleton-agnostic: each vertex's own nearest bones, no names to match.
+    GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with skinweights-any (it matches no bone names)");
+    const Character ch = load_gltf(in);
+    lm.model->to(dev);
+    lm.model->fold_batch_norm();
+    WeightPrediction p = predict_skin_weights_any(*lm.model, lm.norm, ch, int(k));
+    if (min_weight > 0) p.weights = limit_weights(p.weights, int(k), float(min_weight));
+    save_gltf_with_weights(in, ch, p.weights, out, int(k));
+    std::printf("gat predict-weights: skinweights-any (%s, %lld candidate bones per vertex) on %s, device %s\n",
+                model_path.c_str(), static_cast<long long>(lm.model->config().out_dim), in.c_str(),
+                device_label(dev).c_str());
+    std::printf("  %lld vertices welded (%lld in the file), %d joints\n", static_cast<long long>(ch.mesh.num_vertices()),
+                static_cast<long long>(ch.num_file_vertices()), ch.skeleton.num_joints());
+    std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld)\n",
+                double(p.weights.joint.size()) / double(std::max<std::int64_t>(1, p.weights.num_vertices())),
+                static_cast<long long>(p.weights.max_influences()), k);
+    std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
+                out.c_str());
+    return 0;
+  }
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::weights);
   const Character ch = load_gltf(in);
   lm.model->to(dev);
