@@ -235,14 +235,7 @@ int gat::cmd_eval(int argc, char** argv) {
         }
         per.push_back(std::move(r));
       }
-      std::printf("\n%s", character::weight_eval_markdown(per).c_str());
-      std::printf("(deformation: LBS with predicted vs artist weights, %d random poses within +-%.2f rad, two worst "
-                  "poses, divided by the character's height)\n",
-                  eo.poses, double(eo.pose_angle));
-      if (!json_path.empty()) {
-        character::write_text_atomic(json_path, character::weight_eval_json(cfg.name, per, eo));
-        std::printf("  JSON: %s\n", json_path.c_str());
-      }
+      gat::print_weight_table(per, eo, cfg.name, json_path);
     } else if (!json_path.empty() || !errormap_dir.empty()) {
       std::fprintf(stderr, "gat eval: --json / --errormaps need a dataset (--data)\n");
       return 2;

@@ -71,15 +71,20 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
                 pc.character.skeleton.num_joints(), s);
     per.push_back(std::move(r));
   }
+  print_weight_table(per, eo, model ? method : std::string("bone-heat"), json_path);
+  return 0;
+}
+
+void print_weight_table(const std::vector<character::CharacterWeightEval>& per, const character::WeightEvalOptions& eo,
+                        const std::string& method, const std::string& json_path) {
   std::printf("\n%s", character::weight_eval_markdown(per).c_str());
   std::printf("(deformation: LBS with predicted vs artist weights, %d random poses within +-%.2f rad, two worst "
               "poses, divided by the character's height)\n",
               eo.poses, double(eo.pose_angle));
   if (!json_path.empty()) {
-    character::write_text_atomic(json_path, character::weight_eval_json(model ? method : std::string("bone-heat"), per, eo));
+    character::write_text_atomic(json_path, character::weight_eval_json(method, per, eo));
     std::printf("  JSON: %s\n", json_path.c_str());
   }
-  return 0;
 }
 
 }  // namespace gat

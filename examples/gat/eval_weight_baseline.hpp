@@ -8,7 +8,16 @@
 
 #include "gatcore/models/checkpoint.hpp"
 
+#include <vector>
+
+#include "gatcore/character/eval/weight_eval.hpp"
+
 namespace gat {
+// Prints the per-character Markdown table and its legend, and writes the JSON
+// when json_path is set (shared with cmd_eval's super-skeleton models).
+void print_weight_table(const std::vector<gatcore::character::CharacterWeightEval>& per,
+                        const gatcore::character::WeightEvalOptions& eo, const std::string& method,
+                        const std::string& json_path);
 // model: null for a baseline (method "bone-heat"), else a skinweights-any checkpoint.
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
                          long seed, double min_weight, const std::string& json_path,
