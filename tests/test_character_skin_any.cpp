@@ -56,6 +56,8 @@ TEST_CASE("bone candidates of a two-bone tube: nearest first, padded past the jo
     CHECK(f[kPairFeatures] > f[0]);
     // Bone length: root 1 (world); bone1, a leaf, half its parent's.
     CHECK(f[5] == Approx((y < 1.0f ? 1.0f : 0.5f) * s).margin(1e-4));
+    CHECK(f[9] > 0.6f);                                            // bone heat: mostly the nearest bone
+    CHECK(f[9] + f[kPairFeatures + 9] == Approx(1.0f).margin(1e-4));  // two bones: heat sums to 1
   }
   // Targets: the artist's weights of the candidates (blend 0: one-hot).
   const Tensor t = candidate_targets(c, pc.character.mesh.weights);

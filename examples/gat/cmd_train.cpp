@@ -311,7 +311,7 @@ int gat::cmd_train(int argc, char** argv) {
     // character::normalise_bone_name), the statistics are norm.mean / norm.inv_std.
     extra["feature_layout"] = any_skeleton
                             ? "bone-candidates: rest position (3), rest normal (3), then per each vertex's nearest "
-                              "bones (out_dim of them, nearest first) 9 bone-relative columns "
+                              "bones (out_dim of them, nearest first) 10 bone-relative columns "
                               "(character/features/bone_candidates.hpp); outputs: those bones"
                             : cfg.task == Task::weights
                             ? "neuroskinning: rest position (3), rest normal (3), distance to each skeleton bone "

@@ -40,6 +40,13 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
     max_depth = std::max(max_depth, depth[j]);
   }
   const auto children = sk.children();
+  // Bone heat's weights (no pruning) as a classical prior per candidate: the
+  // network learns the corrections to it.
+  BoneHeatParams hp;
+  hp.max_influences = 64;
+  hp.min_weight = 0.0f;
+  const SkinWeights heat = bone_heat_weights(ch, hp);
+  std::vector<float> heat_row(static_cast<std::size_t>(nj), 0.0f);
   struct Near {
     float d, along, perp, dy, len, t;
   };
@@ -49,6 +56,7 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
     float* row = out.features.data() + v * dim;
     for (int c = 0; c < 6; ++c) row[c] = base.at(v, c);
     const float x[3] = {rest[3 * v], rest[3 * v + 1], rest[3 * v + 2]};
+    for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e) heat_row[heat.joint[e]] = heat.weight[e];
     for (std::int32_t j = 0; j < nj; ++j) {
       Near best{1e30f, 0, 0, 0, 0, 0};
       for (const auto& [a, b] : seg[j]) {
@@ -97,7 +105,9 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
       f[6] = e.t;
       f[7] = float(depth[j]) / float(max_depth);
       f[8] = children[j].empty() ? 1.0f : 0.0f;
+      f[9] = heat_row[j];
     }
+    for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e) heat_row[heat.joint[e]] = 0.0f;
   }
   return out;
 }

@@ -14,7 +14,8 @@
 //   along the bone (from its head), distance from the bone's line, height
 //   above the bone's closest point, bone length, fraction along the bone
 //   (clamped to [0, 1]), depth in the hierarchy / the skeleton's depth,
-//   1 for a leaf joint
+//   1 for a leaf joint, the bone's bone-heat weight at the vertex
+//   (deform/bone_heat.hpp, unpruned: a classical prior the network corrects)
 // (lengths in the normalised frame: height 1). Candidates past the joint
 // count are zero rows with joint -1.
 #include <cstdint>
@@ -25,7 +26,7 @@
 
 namespace gatcore::character {
 
-inline constexpr int kPairFeatures = 9;
+inline constexpr int kPairFeatures = 10;
 inline constexpr int kDefaultCandidates = 8;
 
 struct BoneCandidates {
