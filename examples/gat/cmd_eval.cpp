@@ -153,6 +153,12 @@ int run_eval(const EvalArgs& a) {
   const Device dev = gat::device_from_flag(a.common.device, "eval");
   gat::Activity doing("evaluating " + path);
   LoadedModel l = load_checkpoint(path);
+  if (l.model->config().name == "skinweights-any") {
+    // Each character's own joints (no super skeleton): the baselines' protocol.
+    if (data.empty() && l.file.metadata.count("data_path")) data = l.file.metadata.at("data_path");
+    return gat::eval_weight_baseline("skinweights-any", data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
+                                      json_path, &l);
+  }
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
   const auto& md = l.file.metadata;
@@ -325,14 +331,7 @@ int run_eval(const EvalArgs& a) {
           std::printf("  error map: %s\n", (std::filesystem::path(errormap_dir) / (file + ".png")).string().c_str());
         }
       }
-      std::printf("\n%s", character::weight_eval_markdown(per).c_str());
-      std::printf("(deformation: LBS with predicted vs artist weights, %d random poses within +-%.2f rad, two worst "
-                  "poses, divided by the character's height)\n",
-                  eo.poses, double(eo.pose_angle));
-      if (!json_path.empty() && root) {
-        character::write_text_atomic(json_path, character::weight_eval_json(cfg.name, per, eo));
-        std::printf("  JSON: %s\n", json_path.c_str());
-      }
+      gat::print_weight_table(per, eo, cfg.name, root ? json_path : std::string());
     } else if (!json_path.empty() || !errormap_dir.empty()) {
       std::fprintf(stderr, "gat eval: --json / --errormaps need a dataset (--data)\n");
       return 2;

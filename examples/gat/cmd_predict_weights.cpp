@@ -75,6 +75,27 @@ int run(const PredictArgs& a) {
   const Device dev = device_from_flag(a.common.device, "predict-weights");
   Activity reading("reading the checkpoint " + model_path);
   models::LoadedModel lm = models::load_checkpoint(model_path);
+  if (lm.model->config().name == "skinweights-any") {
+    // Skeleton-agnostic: each vertex's own nearest bones, no names to match.
+    GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with skinweights-any (it matches no bone names)");
+    const Character ch = load_gltf(in);
+    lm.model->to(dev);
+    lm.model->fold_batch_norm();
+    WeightPrediction p = predict_skin_weights_any(*lm.model, lm.norm, ch, int(k));
+    if (min_weight > 0) p.weights = limit_weights(p.weights, int(k), float(min_weight));
+    save_gltf_with_weights(in, ch, p.weights, out, int(k));
+    std::printf("gat predict-weights: skinweights-any (%s, %lld candidate bones per vertex) on %s, device %s\n",
+                model_path.c_str(), static_cast<long long>(lm.model->config().out_dim), in.c_str(),
+                device_label(dev).c_str());
+    std::printf("  %lld vertices welded (%lld in the file), %d joints\n", static_cast<long long>(ch.mesh.num_vertices()),
+                static_cast<long long>(ch.num_file_vertices()), ch.skeleton.num_joints());
+    std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld)\n",
+                double(p.weights.joint.size()) / double(std::max<std::int64_t>(1, p.weights.num_vertices())),
+                static_cast<long long>(p.weights.max_influences()), k);
+    std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
+                out.c_str());
+    return 0;
+  }
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::weights);
   const Character ch = load_gltf(in);
   lm.model->to(dev);
@@ -111,7 +132,8 @@ Runner setup_predict_weights(CLI::App& gat) {
   set_details(c, "Predicts skin weights for CHARACTER (.glb/.gltf) with a skin-weight checkpoint (neuroskinning, "
                 "neuroskinning-nopool, pointnet, fc; trained with gat train --data) and writes the file again with "
                 "the new weights, everything else kept. The model's bones are matched to the character's joints by "
-                "normalised name (\"LeftArm\" = \"Arm.L\" = \"arm.l\"); joints without a match get no weight.");
+                "normalised name (\"LeftArm\" = \"Arm.L\" = \"arm.l\"); joints without a match get no weight. skinweights-any checkpoints work on any skeleton (each vertex's own "
+                 "nearest bones; no names).");
   c.add_option("MODEL CHARACTER", a->positional,
                "a skin-weight checkpoint (.gcm; not with --method bone-heat) and the character (.glb / .gltf)")
       ->expected(1, 2);

@@ -19,6 +19,7 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
+#include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
 #include "gatcore/character/data/training_data.hpp"
@@ -201,6 +202,14 @@ int run_train(TrainArgs a) {
     if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
     if (td) cfg.in_dim = td->feature_dim(cfg.task);
     cfg.out_dim = cfg.task == Task::weights ? (td ? td->super.num_bones() : demo::kTubeBones) : 3;
+    if (cfg.name == "skinweights-any") {  // its columns are each vertex's own nearest bones, not the super skeleton
+      if (!td) {
+        std::fprintf(stderr, "gat train: skinweights-any learns from a dataset's characters (--data)\n");
+        return 2;
+      }
+      cfg.in_dim = character::bone_candidate_feature_dim(character::kDefaultCandidates);
+      cfg.out_dim = character::kDefaultCandidates;
+    }
     if (!loss.empty()) {
       if (cfg.task == Task::weights) {
         std::fprintf(stderr, "gat train: --loss applies to displacement models; %s learns skin weights (KL)\n",
@@ -229,7 +238,8 @@ int run_train(TrainArgs a) {
                  resume.c_str(), displacement_loss_name(cfg.loss), loss.c_str());
     return 2;
   }
-  if (td) {
+  const bool any_skeleton = cfg.name == "skinweights-any";
+  if (td && !any_skeleton) {
     GATCORE_CHECK(cfg.in_dim == td->feature_dim(cfg.task) &&
                       (cfg.task != Task::weights || cfg.out_dim == td->super.num_bones()),
                   "model '", resume, "' takes ", cfg.in_dim, " features / ", cfg.out_dim, " outputs; dataset ", data,
@@ -238,6 +248,7 @@ int run_train(TrainArgs a) {
   int geodesic_k = 1;
   for (int k : model->pool_sizes()) geodesic_k = std::max(geodesic_k, k);
   const auto data_samples = [&](character::DatasetPart part, int epoch, const character::SampleFilter& build = {}) {
+    if (any_skeleton) return character::bone_candidate_samples(*td, part, int(cfg.out_dim));
     gat::Progress making(std::string("making ") + (part == character::DatasetPart::train ? "training" : "validation") +
                              " samples",
                          0, "samples", quiet);
@@ -291,7 +302,8 @@ int run_train(TrainArgs a) {
                                            {"sample_vertices", std::to_string(opt.sample_vertices)}};
   // The node features a character command (predict-weights, deform) must
   // compute for this model (character_model.hpp).
-  extra["features"] = td ? (cfg.task == Task::weights ? "neuroskinning" : "densegats") : "tube";
+  extra["features"] = td ? (any_skeleton ? "bone-candidates" : cfg.task == Task::weights ? "neuroskinning" : "densegats")
+                        : "tube";
   if (td) {
     extra["data"] = "dataset";
     extra["data_path"] = std::filesystem::absolute(data).string();
@@ -302,7 +314,11 @@ int run_train(TrainArgs a) {
     // For people reading the checkpoint: the feature layout ("features" above
     // is the key predict-weights / deform dispatch on); the columns follow "skeleton" (bone names normalised by
     // character::normalise_bone_name), the statistics are norm.mean / norm.inv_std.
-    extra["feature_layout"] = cfg.task == Task::weights
+    extra["feature_layout"] = any_skeleton
+                            ? "bone-candidates: rest position (3), rest normal (3), then per each vertex's nearest "
+                              "bones (out_dim of them, nearest first) 10 bone-relative columns "
+                              "(character/features/bone_candidates.hpp); outputs: those bones"
+                            : cfg.task == Task::weights
                             ? "neuroskinning: rest position (3), rest normal (3), distance to each skeleton bone "
                               "segment; world frame, hips at the origin, height 1 (character::compute_normalisation)"
                             : "densegats: posed position (3), posed normal (3), distance to each skeleton joint, "

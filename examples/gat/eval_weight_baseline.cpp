@@ -7,14 +7,15 @@
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
+#include "gatcore/character/inference/weight_prediction.hpp"
 
 using namespace gatcore;
 
 namespace gat {
 
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
-                         long seed, double min_weight, const std::string& json_path) {
-  if (method != "bone-heat") {
+                         long seed, double min_weight, const std::string& json_path, models::LoadedModel* model) {
+  if (!model && method != "bone-heat") {
     std::fprintf(stderr, "gat eval: --baseline expects bone-heat, got '%s'\n", method.c_str());
     return 2;
   }
@@ -35,20 +36,30 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     return 2;
   }
   character::BoneHeatParams bp;
-  bp.min_weight = min_weight >= 0 ? float(min_weight) : 0.01f;
+  bp.min_weight = model ? 0.0f : min_weight >= 0 ? float(min_weight) : 0.01f;
   character::WeightEvalOptions eo;
   eo.poses = int(poses);
   eo.pose_angle = td.description.pose_angle;
   eo.seed = std::uint32_t(seed);
+  if (model) {
+    eo.min_weight = min_weight > 0 ? float(min_weight) : 0.0f;
+    model->model->fold_batch_norm();
+  }
   const std::int32_t B = td.super.num_bones();
-  std::printf("gat eval: bone heat (top %d, min weight %.3g) on the %zu %s characters of %s\n", bp.max_influences,
-              double(bp.min_weight), chars.size(), part.c_str(), data.c_str());
+  if (model)
+    std::printf("gat eval: %s (top %d, min weight %.3g) on the %zu %s characters of %s\n", method.c_str(),
+                bp.max_influences, double(eo.min_weight), chars.size(), part.c_str(), data.c_str());
+  else
+    std::printf("gat eval: bone heat (top %d, min weight %.3g) on the %zu %s characters of %s\n", bp.max_influences,
+                double(bp.min_weight), chars.size(), part.c_str(), data.c_str());
   std::vector<character::CharacterWeightEval> per;
   for (const std::int32_t c : chars) {
     const character::PreparedCharacter& pc = td.characters[std::size_t(c)];
     const auto& j2b = td.super.joint_to_bone[std::size_t(c)];
     const auto t0 = std::chrono::steady_clock::now();
-    const character::SkinWeights w = character::bone_heat_weights(pc.character, bp);
+    const character::SkinWeights w =
+        model ? character::predict_skin_weights_any(*model->model, model->norm, pc, bp.max_influences)
+              : character::bone_heat_weights(pc.character, bp);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::vector<float> pred = character::super_weights(w, j2b, B);
     const std::vector<float> truth = character::super_weights(pc.character.mesh.weights, j2b, B);
@@ -56,19 +67,24 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     const std::string& entry = td.description.characters[std::size_t(c)];
     const std::filesystem::path f(entry);
     r.name = entry.rfind("procedural:", 0) == 0 ? entry : f.parent_path().filename().string() + "/" + f.stem().string();
-    std::printf("  %s: %lld vertices, %d joints, bone heat %.2f s\n", r.name.c_str(), static_cast<long long>(r.vertices),
+    std::printf("  %s: %lld vertices, %d joints, %.2f s\n", r.name.c_str(), static_cast<long long>(r.vertices),
                 pc.character.skeleton.num_joints(), s);
     per.push_back(std::move(r));
   }
+  print_weight_table(per, eo, model ? method : std::string("bone-heat"), json_path);
+  return 0;
+}
+
+void print_weight_table(const std::vector<character::CharacterWeightEval>& per, const character::WeightEvalOptions& eo,
+                        const std::string& method, const std::string& json_path) {
   std::printf("\n%s", character::weight_eval_markdown(per).c_str());
-  std::printf("(deformation: LBS with bone-heat vs artist weights, %d random poses within +-%.2f rad, two worst "
+  std::printf("(deformation: LBS with predicted vs artist weights, %d random poses within +-%.2f rad, two worst "
               "poses, divided by the character's height)\n",
               eo.poses, double(eo.pose_angle));
   if (!json_path.empty()) {
-    character::write_text_atomic(json_path, character::weight_eval_json("bone-heat", per, eo));
+    character::write_text_atomic(json_path, character::weight_eval_json(method, per, eo));
     std::printf("  JSON: %s\n", json_path.c_str());
   }
-  return 0;
 }
 
 }  // namespace gat

@@ -1,10 +1,25 @@
 #pragma once
-// `gat eval --baseline bone-heat --data DATASET`: NeuroSkinning's per-character
-// skin-weight table for a classical method (no model) on a dataset's
-// characters, so baselines and models share one protocol. Called by cmd_eval.
+// `gat eval --baseline bone-heat --data DATASET` and `gat eval --model
+// skinweights-any.gcm --data DATASET`: NeuroSkinning's per-character
+// skin-weight table for a method that works on each character's own joints
+// (a classical method, or the skeleton-agnostic model), so baselines and
+// models share one protocol. Called by cmd_eval.
 #include <string>
 
+#include "gatcore/models/checkpoint.hpp"
+
+#include <vector>
+
+#include "gatcore/character/eval/weight_eval.hpp"
+
 namespace gat {
+// Prints the per-character Markdown table and its legend, and writes the JSON
+// when json_path is set (shared with cmd_eval's super-skeleton models).
+void print_weight_table(const std::vector<gatcore::character::CharacterWeightEval>& per,
+                        const gatcore::character::WeightEvalOptions& eo, const std::string& method,
+                        const std::string& json_path);
+// model: null for a baseline (method "bone-heat"), else a skinweights-any checkpoint.
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
-                         long seed, double min_weight, const std::string& json_path);
+                         long seed, double min_weight, const std::string& json_path,
+                         gatcore::models::LoadedModel* model = nullptr);
 }

@@ -27,10 +27,16 @@ ModelConfig ModelConfig::defaults(const std::string& name, std::int64_t in_dim, 
   } else if (name == "neuroskinning-nopool") {
     c.task = Task::weights;
     c.pool = false;
+  } else if (name == "skinweights-any") {
+    // NeuroSkinning's graph network without geodesic pooling over the
+    // skeleton-agnostic bone-candidate features (character/features/
+    // bone_candidates.hpp): out_dim = candidates per vertex, not bones.
+    c.task = Task::weights;
+    c.pool = false;
   } else {
     throw InvalidArgument("unknown model '" + name +
                           "' (known: densegats, densegats-noself, densegats-nodense, origat, neuroskinning, "
-                          "neuroskinning-nopool, fc, pointnet)");
+                          "neuroskinning-nopool, skinweights-any, fc, pointnet)");
   }
   if (out_dim > 0) c.out_dim = out_dim;
   return c;

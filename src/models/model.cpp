@@ -10,7 +10,7 @@ namespace gatcore::models {
 
 std::vector<std::string> model_names() {
   return {"densegats", "densegats-noself", "densegats-nodense", "origat",
-          "neuroskinning", "neuroskinning-nopool", "fc", "pointnet"};
+          "neuroskinning", "neuroskinning-nopool", "skinweights-any", "fc", "pointnet"};
 }
 
 std::unique_ptr<Model> make_model(const ModelConfig& cfg, std::uint64_t seed) {
@@ -21,7 +21,7 @@ std::unique_ptr<Model> make_model(const ModelConfig& cfg, std::uint64_t seed) {
   const std::string& n = cfg.name;
   if (n.rfind("densegats", 0) == 0) return detail::make_densegats(cfg, seed);
   if (n == "origat") return detail::make_origat(cfg, seed);
-  if (n.rfind("neuroskinning", 0) == 0) return detail::make_neuroskinning(cfg, seed);
+  if (n.rfind("neuroskinning", 0) == 0 || n == "skinweights-any") return detail::make_neuroskinning(cfg, seed);
   if (n == "fc") return detail::make_fc(cfg, seed);
   if (n == "pointnet") return detail::make_pointnet(cfg, seed);
   ModelConfig::defaults(n, 1);  // throws the "unknown model" message

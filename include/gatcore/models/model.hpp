@@ -1,6 +1,6 @@
 #pragma once
 // Models selectable by name: densegats, densegats-noself, densegats-nodense,
-// origat, neuroskinning, neuroskinning-nopool, fc, pointnet.
+// origat, neuroskinning, neuroskinning-nopool, skinweights-any, fc, pointnet.
 //
 // A Model owns its parameters in an nn::Registry (hierarchical names) and
 // maps a Batch (block-diagonal graph + features) to per-vertex outputs:

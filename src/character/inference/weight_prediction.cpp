@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "gatcore/character/features/bone_candidates.hpp"
 #include "gatcore/character/features/features.hpp"
 #include "gatcore/character/features/frame_features.hpp"
 #include "gatcore/error.hpp"
@@ -58,6 +59,39 @@ WeightPrediction predict_skin_weights(models::Model& model, const models::Normal
     }
     w.ptr.push_back(static_cast<std::int64_t>(w.joint.size()));
   }
+  out.seconds_features = std::chrono::duration<double>(t1 - t0).count();
+  out.seconds_inference = std::chrono::duration<double>(t2 - t1).count();
+  return out;
+}
+
+SkinWeights predict_skin_weights_any(models::Model& model, const models::Normaliser& norm,
+                                     const PreparedCharacter& pc, int max_influences) {
+  const models::ModelConfig& cfg = model.config();
+  GATCORE_CHECK(cfg.task == models::Task::weights && cfg.name == "skinweights-any", pc.character.name, ": ", cfg.name,
+                " is not the skeleton-agnostic skin-weight model (skinweights-any)");
+  GATCORE_CHECK(max_influences >= 1, "predict_skin_weights_any: max_influences must be >= 1, got ", max_influences);
+  const int k = static_cast<int>(cfg.out_dim);
+  BoneCandidates c = bone_candidate_features(pc, k);
+  GATCORE_CHECK(cfg.in_dim == c.features.cols(), pc.character.name, ": the model takes ", cfg.in_dim,
+                " features, the bone candidates give ", c.features.cols());
+  models::Sample s;
+  s.name = pc.character.name;
+  s.features = c.features;
+  s.graph = share(CsrGraph(pc.mesh_graph));
+  s.bone_mask = Tensor::zeros(1, k);
+  for (int i = 0; i < c.valid; ++i) s.bone_mask.at(0, i) = 1.0f;
+  const Tensor y = models::predict(model, s, norm, max_influences);
+  return weights_from_candidates(c, y.contiguous() ? y : y.clone());
+}
+
+WeightPrediction predict_skin_weights_any(models::Model& model, const models::Normaliser& norm, const Character& ch,
+                                          int max_influences) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const PreparedCharacter pc = prepare_character(ch, DeltaMushParams{0, 0.5f});
+  WeightPrediction out;
+  const auto t1 = std::chrono::steady_clock::now();
+  out.weights = predict_skin_weights_any(model, norm, pc, max_influences);
+  const auto t2 = std::chrono::steady_clock::now();
   out.seconds_features = std::chrono::duration<double>(t1 - t0).count();
   out.seconds_inference = std::chrono::duration<double>(t2 - t1).count();
   return out;

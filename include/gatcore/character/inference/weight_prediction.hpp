@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/character/features/prepared_character.hpp"
 #include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/rig/character.hpp"
 #include "gatcore/models/model.hpp"
@@ -26,5 +27,14 @@ struct WeightPrediction {
 WeightPrediction predict_skin_weights(models::Model& model, const models::Normaliser& norm,
                                       const std::vector<std::string>& bones, const Character& ch,
                                       int max_influences = 4, const BoneAliases& aliases = {});
+
+// The skeleton-agnostic model (skinweights-any, trained on
+// features/bone_candidates.hpp's features with K = model out_dim candidates):
+// no bone names, no mapping, any skeleton. `mapping` stays empty.
+WeightPrediction predict_skin_weights_any(models::Model& model, const models::Normaliser& norm, const Character& ch,
+                                          int max_influences = 4);
+// The same on a prepared (world-frame) character (evaluation).
+SkinWeights predict_skin_weights_any(models::Model& model, const models::Normaliser& norm,
+                                     const PreparedCharacter& pc, int max_influences = 4);
 
 }  // namespace gatcore::character

@@ -1,0 +1,52 @@
+#pragma once
+// Skeleton-agnostic skin-weight features (issue #15; in the spirit of RigNet's
+// skinning network, Xu et al. 2020): instead of one column per bone of a
+// training super skeleton, every vertex lists its K nearest bones of its own
+// skeleton (by distance to the bones' segments, deform/bone_heat.hpp's
+// bone_segments) and describes each (vertex, bone) pair by bone-relative
+// quantities that mean the same on any rig. A model then scores the K
+// candidates and softmaxes over them: any joint count, any names.
+//
+// Row of a vertex: rest position (3), rest normal (3) (normalised, like
+// NeuroSkinning's), then per candidate k = 0..K-1 (nearest first)
+// kPairFeatures columns:
+//   distance to the bone, distance minus the nearest candidate's, position
+//   along the bone (from its head), distance from the bone's line, height
+//   above the bone's closest point, bone length, fraction along the bone
+//   (clamped to [0, 1]), depth in the hierarchy / the skeleton's depth,
+//   1 for a leaf joint, the bone's bone-heat weight at the vertex
+//   (deform/bone_heat.hpp, unpruned: a classical prior the network corrects)
+// (lengths in the normalised frame: height 1). Candidates past the joint
+// count are zero rows with joint -1.
+#include <cstdint>
+#include <vector>
+
+#include "gatcore/character/features/prepared_character.hpp"
+#include "gatcore/tensor.hpp"
+
+namespace gatcore::character {
+
+inline constexpr int kPairFeatures = 10;
+inline constexpr int kDefaultCandidates = 8;
+
+struct BoneCandidates {
+  int k = 0;                        // candidates per vertex
+  int valid = 0;                    // min(k, joints): candidates that name a joint
+  std::vector<std::int32_t> joint;  // [n * k] joint of candidate (v, c), nearest first; -1 past `valid`
+  Tensor features;                  // [n, 6 + k * kPairFeatures]
+};
+
+std::int64_t bone_candidate_feature_dim(int k);
+
+// Throws InvalidArgument for k < 1 or a character without joints.
+BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k = kDefaultCandidates);
+
+// The character's weights over candidates ([n, k], rows summing to 1: the
+// artist's weights of the candidate joints renormalised; a vertex whose
+// joints are all outside its candidates puts 1 on its nearest candidate).
+Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w);
+
+// Candidate probabilities [n, k] -> weights over the character's joints.
+SkinWeights weights_from_candidates(const BoneCandidates& c, const Tensor& probabilities);
+
+}  // namespace gatcore::character

@@ -1,0 +1,161 @@
+#include "gatcore/character/features/bone_candidates.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/features/frame_features.hpp"
+#include "gatcore/error.hpp"
+
+namespace gatcore::character {
+
+std::int64_t bone_candidate_feature_dim(int k) { return 6 + static_cast<std::int64_t>(k) * kPairFeatures; }
+
+BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
+  const Character& ch = pc.character;
+  const Skeleton& sk = ch.skeleton;
+  const std::int32_t nj = sk.num_joints();
+  GATCORE_CHECK(k >= 1 && k <= 64, ch.name, ": bone candidates per vertex must be in [1, 64], got ", k);
+  GATCORE_CHECK(nj > 0, ch.name, ": bone candidates need a skeleton with joints");
+  const std::int64_t n = ch.mesh.num_vertices();
+  BoneCandidates out;
+  out.k = k;
+  out.valid = std::min(k, nj);
+  out.joint.assign(static_cast<std::size_t>(n * k), -1);
+  const std::int64_t dim = bone_candidate_feature_dim(k);
+  out.features = Tensor::zeros(n, dim);
+  // Position and normal columns: NeuroSkinning's first six.
+  const Tensor base = neuroskinning_rest_features(pc, all_vertices(n));
+  const std::vector<float> rest = apply_normalisation(pc.norm, ch.mesh.positions);
+  // Segments in the normalised frame.
+  const auto segs = bone_segments(sk);
+  std::vector<std::vector<std::pair<Vec3, Vec3>>> seg(static_cast<std::size_t>(nj));
+  for (std::int32_t j = 0; j < nj; ++j)
+    for (const auto& s : segs[j]) seg[j].push_back({apply_normalisation(pc.norm, s.a), apply_normalisation(pc.norm, s.b)});
+  std::vector<int> depth(static_cast<std::size_t>(nj), 0);
+  int max_depth = 1;
+  for (std::int32_t j = 0; j < nj; ++j) {
+    if (sk.parents[j] >= 0) depth[j] = depth[sk.parents[j]] + 1;
+    max_depth = std::max(max_depth, depth[j]);
+  }
+  const auto children = sk.children();
+  // Bone heat's weights (no pruning) as a classical prior per candidate: the
+  // network learns the corrections to it.
+  BoneHeatParams hp;
+  hp.max_influences = 64;
+  hp.min_weight = 0.0f;
+  const SkinWeights heat = bone_heat_weights(ch, hp);
+  std::vector<float> heat_row(static_cast<std::size_t>(nj), 0.0f);
+  struct Near {
+    float d, along, perp, dy, len, t;
+  };
+  std::vector<Near> near(static_cast<std::size_t>(nj));
+  std::vector<std::pair<float, std::int32_t>> order(static_cast<std::size_t>(nj));
+  for (std::int64_t v = 0; v < n; ++v) {
+    float* row = out.features.data() + v * dim;
+    for (int c = 0; c < 6; ++c) row[c] = base.at(v, c);
+    const float x[3] = {rest[3 * v], rest[3 * v + 1], rest[3 * v + 2]};
+    for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e) heat_row[heat.joint[e]] = heat.weight[e];
+    for (std::int32_t j = 0; j < nj; ++j) {
+      Near best{1e30f, 0, 0, 0, 0, 0};
+      for (const auto& [a, b] : seg[j]) {
+        float ab[3], ax[3];
+        double l2 = 0, proj = 0;
+        for (int c = 0; c < 3; ++c) {
+          ab[c] = b[c] - a[c];
+          ax[c] = x[c] - a[c];
+          l2 += double(ab[c]) * ab[c];
+          proj += double(ab[c]) * ax[c];
+        }
+        const double len = std::sqrt(l2);
+        const double t = l2 > 0 ? std::clamp(proj / l2, 0.0, 1.0) : 0.0;
+        double d2 = 0, dy = 0;
+        for (int c = 0; c < 3; ++c) {
+          const double q = a[c] + t * ab[c];
+          d2 += (x[c] - q) * (x[c] - q);
+          if (c == 1) dy = x[c] - q;
+        }
+        const double along = len > 0 ? proj / len : 0.0;
+        double perp2 = 0;
+        for (int c = 0; c < 3; ++c) {
+          const double r = ax[c] - (len > 0 ? along * ab[c] / len : 0.0);
+          perp2 += r * r;
+        }
+        const float d = static_cast<float>(std::sqrt(d2));
+        if (d < best.d)
+          best = {d, float(along), float(std::sqrt(perp2)), float(dy), float(len), float(t)};
+      }
+      near[j] = best;
+      order[j] = {best.d, j};
+    }
+    std::partial_sort(order.begin(), order.begin() + out.valid, order.end());
+    const float d0 = order[0].first;
+    for (int c = 0; c < out.valid; ++c) {
+      const std::int32_t j = order[c].second;
+      out.joint[static_cast<std::size_t>(v * k + c)] = j;
+      const Near& e = near[j];
+      float* f = row + 6 + c * kPairFeatures;
+      f[0] = e.d;
+      f[1] = e.d - d0;
+      f[2] = e.along;
+      f[3] = e.perp;
+      f[4] = e.dy;
+      f[5] = e.len;
+      f[6] = e.t;
+      f[7] = float(depth[j]) / float(max_depth);
+      f[8] = children[j].empty() ? 1.0f : 0.0f;
+      f[9] = heat_row[j];
+    }
+    for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e) heat_row[heat.joint[e]] = 0.0f;
+  }
+  return out;
+}
+
+Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w) {
+  const std::int64_t n = w.num_vertices();
+  GATCORE_CHECK(static_cast<std::int64_t>(c.joint.size()) == n * c.k, "candidate_targets: ", c.joint.size() / std::max(1, c.k),
+                " candidate rows for ", n, " weight rows");
+  Tensor t = Tensor::zeros(n, c.k);
+  for (std::int64_t v = 0; v < n; ++v) {
+    double s = 0;
+    for (int i = 0; i < c.valid; ++i) {
+      const std::int32_t j = c.joint[static_cast<std::size_t>(v * c.k + i)];
+      for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e)
+        if (w.joint[e] == j) t.at(v, i) += w.weight[e];
+      s += t.at(v, i);
+    }
+    if (s > 0)
+      for (int i = 0; i < c.valid; ++i) t.at(v, i) = static_cast<float>(t.at(v, i) / s);
+    else
+      t.at(v, 0) = 1.0f;
+  }
+  return t;
+}
+
+SkinWeights weights_from_candidates(const BoneCandidates& c, const Tensor& p) {
+  const std::int64_t n = static_cast<std::int64_t>(c.joint.size()) / std::max(1, c.k);
+  GATCORE_CHECK(p.rows() == n && p.cols() == c.k, "weights_from_candidates: ", p.rows(), " x ", p.cols(),
+                " probabilities for ", n, " vertices x ", c.k, " candidates");
+  SkinWeights w;
+  std::vector<std::pair<std::int32_t, float>> row;
+  for (std::int64_t v = 0; v < n; ++v) {
+    row.clear();
+    double s = 0;
+    for (int i = 0; i < c.valid; ++i) {
+      const float x = p.at(v, i);
+      GATCORE_CHECK(std::isfinite(x), "weights_from_candidates: non-finite probability at vertex ", v);
+      if (x > 0) row.push_back({c.joint[static_cast<std::size_t>(v * c.k + i)], x}), s += x;
+    }
+    if (s <= 0) row = {{c.joint[static_cast<std::size_t>(v * c.k)], 1.0f}}, s = 1.0;
+    std::sort(row.begin(), row.end());
+    for (const auto& [j, x] : row) {
+      w.joint.push_back(j);
+      w.weight.push_back(static_cast<float>(x / s));
+    }
+    w.ptr.push_back(static_cast<std::int64_t>(w.joint.size()));
+  }
+  return w;
+}
+
+}  // namespace gatcore::character

@@ -1,0 +1,146 @@
+// The skeleton-agnostic skin-weight model (issue #15): bone-candidate features
+// (features/bone_candidates.hpp), its samples (data/bone_candidate_samples.hpp),
+// training on characters with different bone counts in one batch, and
+// prediction that depends on no joint name (inference/weight_prediction.hpp).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "character_fixtures.hpp"
+#include "gatcore/character/data/bone_candidate_samples.hpp"
+#include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/features/bone_candidates.hpp"
+#include "gatcore/character/inference/weight_prediction.hpp"
+#include "gatcore/error.hpp"
+#include "gatcore/models/model.hpp"
+#include "gatcore/models/train.hpp"
+
+using namespace gatcore;
+using namespace gatcore::character;
+
+namespace {
+
+PreparedCharacter procedural(ProceduralKind kind, std::uint32_t seed) {
+  ProceduralOptions o;
+  o.kind = kind;
+  o.seed = seed;
+  o.ring_segments = 8;
+  o.rings_per_bone = 3;
+  return prepare_character(procedural_character(o), DeltaMushParams{0, 0.5f});
+}
+
+}  // namespace
+
+TEST_CASE("bone candidates of a two-bone tube: nearest first, padded past the joint count", "[skin_any]") {
+  const PreparedCharacter pc = prepare_character(charfix::tube_character(12, 8, 2.0f, 0.25f, 0.0f));
+  const BoneCandidates c = bone_candidate_features(pc, 4);
+  const std::int64_t n = pc.character.mesh.num_vertices();
+  REQUIRE(c.k == 4);
+  REQUIRE(c.valid == 2);
+  REQUIRE(c.features.rows() == n);
+  REQUIRE(c.features.cols() == bone_candidate_feature_dim(4));
+  const float s = pc.norm.scale;  // normalised lengths: world * scale
+  for (std::int64_t v = 0; v < n; ++v) {
+    const float y = pc.character.mesh.positions[3 * v + 1];
+    const float r = std::hypot(pc.character.mesh.positions[3 * v], pc.character.mesh.positions[3 * v + 2]);
+    CHECK(c.joint[v * 4 + 2] == -1);
+    CHECK(c.joint[v * 4 + 3] == -1);
+    for (int k = 6 + 2 * kPairFeatures; k < c.features.cols(); ++k) CHECK(c.features.at(v, k) == 0.0f);
+    // Skip the joint (ties), cap centres and the part past the leaf bone (y > 1.5).
+    if (std::abs(y - 1.0f) < 0.1f || r < 0.2f || y > 1.5f) continue;
+    CHECK(c.joint[v * 4] == (y < 1.0f ? 0 : 1));
+    const float* f = c.features.data() + v * c.features.cols() + 6;
+    CHECK(f[0] == Approx(0.25f * s).margin(1e-4));                 // distance = radius
+    CHECK(f[1] == 0.0f);                                           // nearest minus nearest
+    CHECK(f[kPairFeatures + 1] == Approx(f[kPairFeatures] - f[0]).margin(1e-6));  // second minus nearest
+    CHECK(f[kPairFeatures] > f[0]);
+    // Bone length: root 1 (world); bone1, a leaf, half its parent's.
+    CHECK(f[5] == Approx((y < 1.0f ? 1.0f : 0.5f) * s).margin(1e-4));
+    CHECK(f[9] > 0.6f);                                            // bone heat: mostly the nearest bone
+    CHECK(f[9] + f[kPairFeatures + 9] == Approx(1.0f).margin(1e-4));  // two bones: heat sums to 1
+  }
+  // Targets: the artist's weights of the candidates (blend 0: one-hot).
+  const Tensor t = candidate_targets(c, pc.character.mesh.weights);
+  for (std::int64_t v = 0; v < n; ++v) {
+    double sum = 0;
+    for (int k = 0; k < 4; ++k) sum += t.at(v, k);
+    CHECK(sum == Approx(1.0));
+  }
+  CHECK_THROWS_AS(bone_candidate_features(pc, 0), InvalidArgument);
+}
+
+TEST_CASE("skinweights-any trains on characters with different bone counts in one batch", "[skin_any]") {
+  // A humanoid (19 joints: every vertex has 4 candidates) and a two-bone tube
+  // (2 candidates, 2 masked): one batch, one softmax width.
+  const PreparedCharacter a = procedural(ProceduralKind::humanoid, 1);
+  const PreparedCharacter b = prepare_character(charfix::tube_character(12, 8, 2.0f, 0.25f, 0.3f));
+  REQUIRE(a.character.skeleton.num_joints() != b.character.skeleton.num_joints());
+  const int k = 4;
+  std::vector<models::Sample> train{bone_candidate_sample(a, k), bone_candidate_sample(b, k)};
+  CHECK(train[1].bone_mask.at(0, 1) == 1.0f);
+  CHECK(train[1].bone_mask.at(0, 2) == 0.0f);
+  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+  cfg.stage1 = {32, 16};
+  cfg.gc_dims = {16, 16, 16};
+  cfg.global_mlp = {32};
+  cfg.classifier = {32};
+  auto model = models::make_model(cfg, 3);
+  REQUIRE(model->pool_sizes().empty());
+  const models::Normaliser norm = models::Normaliser::fit(train, false);
+  models::TrainOptions opt = models::TrainOptions::defaults_for(cfg);
+  opt.batch_size = 2;  // both characters in one batch: per-character candidate masks, one softmax width
+  opt.sample_vertices = 256;
+  opt.lr = 3e-3f;
+  models::Trainer t(*model, opt, norm);
+  const double before = t.evaluate(train);
+  for (int e = 0; e < 30; ++e) t.run_epoch(train);
+  const double after = t.evaluate(train);
+  INFO("KL before " << before << ", after " << after);
+  CHECK(std::isfinite(after));
+  CHECK(after < 0.6 * before);
+  // Masked candidates get exactly zero.
+  const Tensor y = models::predict(*model, train[1], norm, 0);
+  for (std::int64_t v = 0; v < y.rows(); ++v) {
+    CHECK(y.at(v, 2) == 0.0f);
+    CHECK(y.at(v, 3) == 0.0f);
+  }
+}
+
+TEST_CASE("skinweights-any predicts the same weights whatever the joints are called", "[skin_any]") {
+  ProceduralOptions o;
+  o.seed = 4;
+  o.ring_segments = 8;
+  o.rings_per_bone = 3;
+  const Character original = procedural_character(o);
+  Character renamed = original;
+  for (std::size_t j = 0; j < renamed.skeleton.names.size(); ++j)
+    renamed.skeleton.names[j] = "mixamorig:Bone_" + std::to_string(97 * j % 101);
+  const int k = 4;
+  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+  cfg.stage1 = {16, 8};
+  cfg.gc_dims = {8, 8, 8};
+  cfg.global_mlp = {16};
+  cfg.classifier = {16};
+  auto model = models::make_model(cfg, 5);
+  const PreparedCharacter pc = prepare_character(original, DeltaMushParams{0, 0.5f});
+  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k)}, false);
+  const WeightPrediction p = predict_skin_weights_any(*model, norm, original, 3);
+  const WeightPrediction q = predict_skin_weights_any(*model, norm, renamed, 3);
+  REQUIRE(p.weights.num_vertices() == original.mesh.num_vertices());
+  CHECK(p.weights.ptr == q.weights.ptr);
+  CHECK(p.weights.joint == q.weights.joint);
+  CHECK(p.weights.weight == q.weights.weight);
+  CHECK(p.weights.max_influences() <= 3);
+  for (std::int64_t v = 0; v < p.weights.num_vertices(); ++v) {
+    double s = 0;
+    for (std::int64_t e = p.weights.ptr[v]; e < p.weights.ptr[v + 1]; ++e) {
+      CHECK(p.weights.joint[e] >= 0);
+      CHECK(p.weights.joint[e] < original.skeleton.num_joints());
+      s += p.weights.weight[e];
+    }
+    CHECK(s == Approx(1.0).epsilon(1e-5));
+  }
+  // Another model is refused, naming it.
+  auto other = models::make_model(models::ModelConfig::defaults("fc", bone_candidate_feature_dim(k), k), 1);
+  CHECK_THROWS_AS(predict_skin_weights_any(*other, norm, original, 3), InvalidArgument);
+}
