@@ -270,7 +270,8 @@ Runner setup_dataset(CLI::App& gat) {
                        "morph-target animation (what gat deform writes); MOTION the BVH that drove it, or clip:NAME "
                        "(the character file's own animation). Target frame k is motion frame FIRST + k * (the .pc2 "
                        "sample rate); FIRST: the .pc2 start frame, 0 for a glTF, or --target-first-frame F after the "
-                       "--target. Vertex and frame counts are checked; the character trains and evaluates on its "
+                       "--target (give it for gat deform's caches: their header holds the scene frame, --start-frame, "
+                       "not the motion's). Vertex and frame counts are checked; the character trains and evaluates on its "
                        "target frames only (every --motion-stride-th per epoch)")
       ->expected(3)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   build_cmd.add_option("--target-first-frame", b->target_first_frames,
