@@ -24,8 +24,8 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 
 if [[ "$mode" != "--fuzz-only" ]]; then
   cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DCMAKE_CXX_COMPILER=clang++ \
-    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
+    -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1" \
     -DGATCORE_SANITIZE=address,undefined -DGATCORE_FUZZ=ON -DGATCORE_BUILD_BENCH=OFF
   cmake --build "$build" -j2
   [[ "$mode" == "--build-only" ]] && exit 0

@@ -235,11 +235,9 @@ struct PartPose {
   Vec3 move{0.0f, 0.0f, 0.0f};
 };
 
-inline std::string bvh_name(std::string n) {
-  for (char& c : n)
-    if (c == ' ') c = '_';
-  return n;
-}
+// BVH joint names are the rest of their line: Biped's "Bip01 L Thigh" keeps
+// its spaces (io/bvh.cpp).
+inline std::string bvh_name(std::string n) { return n; }
 
 // The rig as BVH (offsets in file units, every joint ZXY rotation channels,
 // the roots also positions), frame 0 the rest pose, then one frame per pose.

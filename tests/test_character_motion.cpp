@@ -352,3 +352,18 @@ TEST_CASE("CMU motions import; a retargeted walk keeps a humanoid's feet on the 
     CHECK(hi - lo > 0.8f * height);       // upright
   }
 }
+
+TEST_CASE("BVH: a joint's name is the rest of its line (3ds Max Biped's spaces kept)", "[character][bvh]") {
+  const std::string text =
+      "HIERARCHY\nROOT Bip01 Pelvis\n{\n  OFFSET 0 1 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation "
+      "Yrotation\n  JOINT Bip01 L Thigh  {\n    OFFSET 0.1 0 0\n    CHANNELS 3 Zrotation Xrotation Yrotation\n"
+      "    End Site\n    {\n      OFFSET 0 -0.4 0\n    }\n  }\n}\nMOTION\nFrames: 1\nFrame Time: 0.0333333\n"
+      "0 1 0 0 0 0 0 0 0\n";
+  const gatcore::character::Motion m = gatcore::character::parse_bvh(text, "biped.bvh");
+  REQUIRE(m.skeleton.num_joints() == 2);
+  CHECK(m.skeleton.names[0] == "Bip01 Pelvis");
+  CHECK(m.skeleton.names[1] == "Bip01 L Thigh");
+  // A ROOT / JOINT without a name on its line is refused, naming the line.
+  CHECK_THROWS_WITH(gatcore::character::parse_bvh("HIERARCHY\nROOT\n{\n", "bad.bvh"),
+                    Catch::Contains("bad.bvh: line 2") && Catch::Contains("joint name"));
+}

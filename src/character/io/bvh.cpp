@@ -69,6 +69,17 @@ struct Lexer {
       ++pos;
     return text.substr(b, pos - b);
   }
+  // A joint's name: the rest of its line up to a brace, inner spaces kept
+  // (3ds Max's Biped writes "JOINT Bip01 L Thigh").
+  std::string rest_of_line(const char* expecting) {
+    while (pos < text.size() && (text[pos] == ' ' || text[pos] == '\t')) ++pos;
+    const std::size_t b = pos;
+    while (pos < text.size() && text[pos] != '\n' && text[pos] != '\r' && text[pos] != '{' && text[pos] != '}') ++pos;
+    std::size_t e = pos;
+    while (e > b && std::isspace(static_cast<unsigned char>(text[e - 1]))) --e;
+    if (e == b) fail(detail::cat("expected ", expecting, " on the same line"));
+    return std::string(text.substr(b, e - b));
+  }
   void expect(std::string_view word) {
     const std::string_view w = next(std::string(word).c_str());
     if (w != word) fail(detail::cat("expected '", word, "', found '", w, "'"));
@@ -137,7 +148,7 @@ Motion parse_bvh(std::string_view text, const std::string& path) {
   int values_per_frame = 0;
   auto begin_joint = [&](int parent) {
     JointDef j;
-    j.name = std::string(lx.next("a joint name"));
+    j.name = lx.rest_of_line("a joint name");
     j.parent = parent;
     lx.expect("{");
     lx.expect("OFFSET");
