@@ -38,7 +38,7 @@ fi
 # Each fuzzer for a bounded time on a scratch copy of its corpus (new inputs
 # land there, not in the build's seed folder). -rss_limit_mb: a loader that
 # asks for gigabytes for a small file is a defect, reported as such.
-work="$build/fuzz_run"
+work="$(cd "$build" && pwd)/fuzz_run"  # absolute: each fuzzer runs inside it
 rm -rf "$work"
 "$build/tests/fuzz/make_corpus" "$build/tests/fuzz/corpus" >/dev/null
 total=0
