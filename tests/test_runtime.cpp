@@ -68,6 +68,17 @@ __attribute__((always_inline)) inline void count(void* caller) {
     g_allocations.fetch_add(1, std::memory_order_relaxed);
 }
 }  // namespace
+// Under AddressSanitizer the allocator is ASan's: replacing malloc here would
+// hand its blocks to glibc's free. The sanitizer build leaves the hook out and
+// the no-allocation check says it was skipped (the Release suite runs it).
+#if defined(__SANITIZE_ADDRESS__)
+#define GATCORE_TEST_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define GATCORE_TEST_UNDER_ASAN 1
+#endif
+#endif
+#ifndef GATCORE_TEST_UNDER_ASAN
 extern "C" {
 void* malloc(std::size_t n) {
   count(__builtin_return_address(0));
@@ -96,6 +107,7 @@ int posix_memalign(void** p, std::size_t al, std::size_t n) {
 }
 void free(void* p) { __libc_free(p); }
 }
+#endif
 
 using namespace gatcore;
 using namespace gatcore::character;
@@ -223,6 +235,11 @@ TEST_CASE("runtime::Deformer::deform allocates nothing after bind", "[runtime]")
     std::vector<float> out(n3), normals(n3);
     std::vector<std::vector<float>> frames;
     for (int f = 0; f < 4; ++f) frames.push_back(globals_of(ch.skeleton, test_pose(ch.skeleton, f)));
+#ifdef GATCORE_TEST_UNDER_ASAN
+    WARN("skipped: allocation counting needs the malloc hook, left out under AddressSanitizer");
+    d.deform(frames[0], out, normals);
+    continue;
+#endif
     dl_iterate_phdr(find_gomp, nullptr);
     d.deform(frames[0], out, normals);  // warm-up: thread pools, thread-local GEMM packing buffers
     d.deform(frames[1], out, normals);
