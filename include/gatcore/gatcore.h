@@ -53,7 +53,11 @@ typedef enum gatcore_status {
 typedef enum gatcore_device {
   GATCORE_DEVICE_CPU = 0,
   GATCORE_DEVICE_AUTO = 1,  /* the Vulkan GPU when there is one, else the CPU */
-  GATCORE_DEVICE_VULKAN = 2 /* a Vulkan GPU, or GATCORE_ERROR_DEVICE */
+  GATCORE_DEVICE_VULKAN = 2, /* a Vulkan GPU, or GATCORE_ERROR_DEVICE */
+  /* Not a device: makes the enum 32 bits wide (as Vulkan's *_MAX_ENUM), so a
+   * wrong value a caller passes is a value gatcore can check and refuse
+   * (GATCORE_ERROR_ARGUMENT) rather than undefined behaviour in C++. */
+  GATCORE_DEVICE_MAX_ENUM = 0x7FFFFFFF
 } gatcore_device;
 
 /* The calling thread's last error message ("" if none). Valid until the
