@@ -20,6 +20,7 @@
 #include "kernels/edge_softmax.hpp"
 #include "kernels/gat_fused.hpp"
 #include "kernels/gemm.hpp"
+#include "kernels/gemm_prepacked.hpp"
 #include "kernels/pooling.hpp"
 
 namespace {
@@ -348,6 +349,28 @@ BENCHMARK(gemm)
     ->ArgsProduct({{24576}, {1088}, {1024}, {0, 1, 2}})  // NeuroSkinning's classifier input layer (12 x 2048)
     ->Args({2048, 2048, 2048, 0})                   // large squares: the machine's sgemm rate
     ->Args({4096, 4096, 4096, 0})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+// The deploy path's forward products with pre-packed weights
+// (gemm_prepacked.hpp): C[M,N] = A[M,K] B[K,N], precision 0 = fp32 (gemm()'s
+// kernel, B packed once), 1 = bf16 (AVX512_BF16 where the CPU has it, else
+// the portable emulation: slow). Compare with gemm/.../op:0.
+void gemm_prepacked(benchmark::State& state) {
+  const std::int64_t M = state.range(0), K = state.range(1), N = state.range(2);
+  using gatcore::Precision;
+  const Precision p = state.range(3) ? Precision::bf16 : Precision::fp32;
+  const Tensor A = gatbench::random_tensor(M, K, 21), C = Tensor::empty(M, N);
+  const cpu::PrepackedB B = cpu::prepack_b(gatbench::random_tensor(K, N, 22), p);
+  const double m = static_cast<double>(M), k = static_cast<double>(K), n = static_cast<double>(N);
+  state.SetLabel(std::string(gatcore::precision_name(p)) + (p == Precision::bf16 && !gatcore::bf16_supported() ? " (emulated)" : ""));
+  gatbench::run(state, Cost{kF32 * (m * k + m * n), 2 * m * k * n, M}, [&] { cpu::gemm_prepacked(A, B, C); });
+}
+BENCHMARK(gemm_prepacked)
+    ->ArgNames({"M", "K", "N", "bf16"})
+    ->ArgsProduct({{10000}, {392}, {64}, {0, 1}})  // a GAT block's projection (paper size, mid module)
+    ->ArgsProduct({{10000}, {392}, {8}, {0, 1}})   // its self-reinforced stream
+    ->ArgsProduct({{10000}, {504}, {512}, {0, 1}})  // the head's first layer
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 

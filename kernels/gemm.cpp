@@ -76,6 +76,14 @@ bool eigen_requested() {
 }
 }  // namespace
 
+bool detail::gemm_uses_packed_avx512() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  return simd_level() == SimdLevel::avx512 && !eigen_requested();
+#else
+  return false;
+#endif
+}
+
 void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha, float beta) {
   check_cpu_f32(A, "gemm: A");
   check_cpu_f32(B, "gemm: B");

@@ -20,6 +20,17 @@ struct GemmArgs {
 // Own packed AVX-512 kernel (gemm_packed_avx512.cpp), the AVX-512 path;
 // GATCORE_GEMM=eigen selects Eigen's AVX-512 build instead (for comparison).
 void gemm_packed_avx512(const GemmArgs& g);
+// Whether gemm() runs gemm_packed_avx512 (AVX-512 level, GATCORE_GEMM not
+// "eigen"): gemm_prepacked() follows the same choice, so its fp32 products
+// equal gemm()'s bitwise.
+bool gemm_uses_packed_avx512();
+// The same kernel with op(B) packed once ahead (gemm_prepacked.cpp): the
+// packed size in floats of a [k, n] op(B), the packing (g's B, k and n; A and
+// C unused), and the product with `packed` in place of per-call packing. C
+// rows may be a subset (g.m, g.a, g.c for a row range); g.n is B's full width.
+std::int64_t prepacked_size_avx512(std::int64_t k, std::int64_t n);
+void prepack_b_avx512(const GemmArgs& g, float* dst);
+void gemm_prepacked_avx512(const GemmArgs& g, const float* packed);
 void gemm_eigen_baseline(const GemmArgs& g);
 // Defined only on x86-64 builds (gemm_avx2.cpp / gemm_avx512.cpp).
 void gemm_eigen_avx2(const GemmArgs& g);

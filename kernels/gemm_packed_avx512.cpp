@@ -222,8 +222,19 @@ void micro_kernel(std::int64_t kc, const float* __restrict a, std::int64_t strid
   }
 }
 
+// Where the packed B block (k block k0, column block j0) of the whole op(B)
+// [k, n] sits in a pre-packed B (prepack_b_avx512): column blocks in order,
+// each its k blocks in order, a block kc x (nc rounded up to NR). Every column
+// block but the last is kNc wide (a multiple of NR), so block j0 starts at j0 * k.
+inline std::int64_t prepacked_offset(std::int64_t k, std::int64_t j0, std::int64_t nc, std::int64_t k0, int nr) {
+  return j0 * k + k0 * ((nc + nr - 1) / nr * nr);
+}
+
+// `prepacked`: op(B) already packed by prepack_b_avx512 (constant weights,
+// packed once), or null to pack each block here. The arithmetic is the same
+// either way.
 template <int MR, int NV>
-void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf) {
+void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf, const float* prepacked = nullptr) {
   constexpr int NR = 16 * NV;
   static_assert(kMc % MR == 0, "row blocks are whole register tiles");
   // Narrow products (n < kPackAMinN) read A in place (its rows or,
@@ -241,7 +252,11 @@ void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf) {
       const std::int64_t kc = std::min(kKc, k - k0);
       // The first k block applies the caller's beta; later ones accumulate.
       const float beta = k0 == 0 ? g.beta : 1.0f;
-      pack_b(g, k0, kc, j0, nc, NR, buf.b);
+      const float* bblock = buf.b;
+      if (prepacked)
+        bblock = prepacked + prepacked_offset(k, j0, nc, k0, NR);
+      else
+        pack_b(g, k0, kc, j0, nc, NR, buf.b);
       const std::int64_t m_full = pack_a_blocks ? g.m : g.m / MR * MR;
       if (m_full < g.m) pack_a(g, m_full, g.m - m_full, k0, kc, MR, buf.a);
       for (std::int64_t i0 = 0; i0 < g.m; i0 += kMc) {
@@ -249,7 +264,7 @@ void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf) {
         if (pack_a_blocks) pack_a(g, i0, mc, k0, kc, MR, buf.a);
         for (std::int64_t jr = 0; jr < nc; jr += NR) {
           const int nr_eff = int(std::min<std::int64_t>(NR, nc - jr));
-          const float* bp = buf.b + jr * kc;
+          const float* bp = bblock + jr * kc;
           for (std::int64_t ir = 0; ir < mc; ir += MR) {
             const std::int64_t i = i0 + ir;
             float* c = g.c + i * g.ldc + j0 + jr;
@@ -363,6 +378,37 @@ void gemm_packed_avx512(const GemmArgs& g) {
     gemm_blocked<24, 1>(g, k, buf);
   else
     gemm_blocked<12, 2>(g, k, buf);
+}
+
+// ---- pre-packed B (gemm_prepacked.hpp) --------------------------------------
+// The panel width gemm_packed_avx512 uses for a product n columns wide.
+int prepacked_nr_avx512(std::int64_t n) { return n <= 16 ? 16 : 32; }
+
+std::int64_t prepacked_size_avx512(std::int64_t k, std::int64_t n) {
+  const int nr = prepacked_nr_avx512(n);
+  std::int64_t size = 0;
+  for (std::int64_t j0 = 0; j0 < n; j0 += kNc) size += k * ((std::min(kNc, n - j0) + nr - 1) / nr * nr);
+  return size;
+}
+
+void prepack_b_avx512(const GemmArgs& g, float* dst) {
+  const std::int64_t k = g.trans_b ? g.b_cols : g.b_rows;
+  const int nr = prepacked_nr_avx512(g.n);
+  for (std::int64_t j0 = 0; j0 < g.n; j0 += kNc) {
+    const std::int64_t nc = std::min(kNc, g.n - j0);
+    for (std::int64_t k0 = 0; k0 < k; k0 += kKc)
+      pack_b(g, k0, std::min(kKc, k - k0), j0, nc, nr, dst + prepacked_offset(k, j0, nc, k0, nr));
+  }
+}
+
+void gemm_prepacked_avx512(const GemmArgs& g, const float* packed) {
+  const std::int64_t k = g.trans_a ? g.a_rows : g.a_cols;
+  if (g.m == 0 || g.n == 0) return;
+  thread_local Buffers buf;
+  if (prepacked_nr_avx512(g.n) == 16)
+    gemm_blocked<24, 1>(g, k, buf, packed);
+  else
+    gemm_blocked<12, 2>(g, k, buf, packed);
 }
 
 }  // namespace gatcore::cpu::detail

@@ -11,6 +11,7 @@
 #include "gatcore/backend.hpp"
 #include "gatcore/vulkan.hpp"
 #include "kernels/batchnorm.hpp"
+#include "kernels/gemm_prepacked.hpp"
 
 namespace gatcore::models {
 
@@ -22,6 +23,7 @@ constexpr float kBatchNormEps = 1e-5f;
 
 struct DenseStep {  // y = act(x W + b) (act identity: no activation call)
   Tensor W, b;
+  cpu::PrepackedB Wp;  // CPU: W packed once for the product
   Activation act = Activation::identity;
   float slope = 0.f;
 };
@@ -34,12 +36,17 @@ struct GatStep {  // nn::GatBlock in eval mode
   bool bn = false;
   Tensor bn_mean, bn_scale, bn_shift;     // CPU: batchnorm_affine_forward
   Tensor bn_gamma, bn_beta, bn_rm, bn_rv;  // other devices: batchnorm_eval_forward
+  // CPU: [W | self_W] packed once, one product for both streams (the 8-wide
+  // self stream alone leaves most of each vector idle; each output column's
+  // arithmetic is the same whichever panel computes it, so fp32 stays bitwise).
+  cpu::PrepackedB Wp;
   std::int64_t kf() const { return std::int64_t(heads) * head_dim; }
   std::int64_t width() const { return kf() + self_width; }
 };
 
 struct OriLayer {
   Tensor W, att_dst, att_src, b;
+  cpu::PrepackedB Wp;  // CPU
   int heads = 1;
   bool act = true;
 };
@@ -49,6 +56,7 @@ struct OriLayer {
 struct DeployModel {
   ModelConfig cfg;
   Device device = Device::cpu;
+  Precision precision = Precision::fp32;  // of the CPU products
   Normaliser norm;  // host
   std::int64_t params = 0;
   bool origat = false;
@@ -101,11 +109,18 @@ class Loader {
   std::int64_t& count_;
 };
 
-DenseStep dense_step(Loader& L, const std::string& prefix, Activation act, float slope) {
-  return {L.param(prefix + "W"), L.param(prefix + "b"), act, slope};
+// Weights packed for gemm_prepacked (CPU only; other devices run Backend::gemm).
+cpu::PrepackedB pack(const Tensor& W, Device dev, Precision p) {
+  return dev == Device::cpu ? cpu::prepack_b(W, p) : cpu::PrepackedB{};
 }
 
-GatStep gat_step(Loader& L, const std::string& p, const ModelConfig& c, Device dev) {
+DenseStep dense_step(Loader& L, const std::string& prefix, Activation act, float slope, Device dev, Precision p) {
+  DenseStep s{L.param(prefix + "W"), L.param(prefix + "b"), {}, act, slope};
+  s.Wp = pack(s.W, dev, p);
+  return s;
+}
+
+GatStep gat_step(Loader& L, const std::string& p, const ModelConfig& c, Device dev, Precision prec) {
   GatStep s;
   s.heads = c.heads;
   s.head_dim = c.head_dim;
@@ -116,6 +131,12 @@ GatStep gat_step(Loader& L, const std::string& p, const ModelConfig& c, Device d
   if (s.self_width > 0) {
     s.self_W = L.param(p + "self.W");
     s.self_b = L.param(p + "self.b");
+  }
+  if (dev == Device::cpu) {
+    Tensor both = Tensor::empty(s.W.rows(), s.width());
+    both.cols_slice(0, s.kf()).copy_from_(s.W);
+    if (s.self_width > 0) both.cols_slice(s.kf(), s.width()).copy_from_(s.self_W);
+    s.Wp = cpu::prepack_b(both, prec);
   }
   s.bn = c.batch_norm;
   if (s.bn) {
@@ -141,15 +162,22 @@ bool deployable(const ModelConfig& c) {
   return c.task == Task::displacement && (c.name.rfind("densegats", 0) == 0 || c.name == "origat");
 }
 
-std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normaliser& norm, Device device) {
+std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normaliser& norm, Device device,
+                                                     Precision precision) {
   const ModelConfig& c = model.config();
   GATCORE_CHECK(deployable(c), "deploy: model '", c.name, "' (", task_name(c.task),
                 ") has no deploy path; the runtime deforms with displacement models (densegats, densegats-noself, "
                 "densegats-nodense, origat)");
   GATCORE_CHECK(device == Device::cpu || has_backend(device), "deploy: no ", device_name(device), " backend");
+  GATCORE_CHECK(precision == Precision::fp32 || device == Device::cpu, "deploy: precision bf16 runs on the CPU only (the ",
+                device_name(device), " device computes in fp32); use fp32 there");
+  GATCORE_CHECK(precision == Precision::fp32 || bf16_supported(),
+                "deploy: precision bf16 needs a CPU with AVX512_BF16 (this one has none, or GATCORE_SIMD forces a lower "
+                "level); use fp32");
   auto d = std::make_shared<DeployModel>();
   d->cfg = c;
   d->device = device;
+  d->precision = precision;
   d->norm.target_scale = norm.target_scale;
   if (norm.defined()) {
     check_shape(norm.mean, 1, c.in_dim, "deploy: normaliser mean");
@@ -168,6 +196,7 @@ std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normali
       o.att_dst = L.param(p + "att_dst");
       o.att_src = L.param(p + "att_src");
       o.b = L.param(p + "b");
+      o.Wp = pack(o.W, device, precision);
       o.heads = int(o.att_dst.rows());
       o.act = l + 1 < c.gat_layers;
       d->layers.push_back(std::move(o));
@@ -177,31 +206,32 @@ std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normali
   // DenseGATs: DenseLayers with tanh (densegats.cpp's DenseLayerOptions; the
   // slope is unused by tanh but passed as there).
   for (std::size_t k = 0; k < c.transform.size(); ++k)
-    d->transform.push_back(dense_step(L, "transform." + std::to_string(k) + ".lin.", Activation::tanh, 0.f));
+    d->transform.push_back(dense_step(L, "transform." + std::to_string(k) + ".lin.", Activation::tanh, 0.f, device, precision));
   d->dense = c.dense;
   std::int64_t w = c.transform.back();
   for (int m = 0; m < c.modules; ++m) {
     d->module_in.push_back(w);
     std::vector<GatStep> blocks;
     for (int b = 0; b < c.blocks; ++b)
-      blocks.push_back(gat_step(L, "modules." + std::to_string(m) + ".blocks." + std::to_string(b) + ".", c, device));
+      blocks.push_back(gat_step(L, "modules." + std::to_string(m) + ".blocks." + std::to_string(b) + ".", c, device, precision));
     const std::int64_t bw = blocks.front().width();
     w = c.dense ? w + std::int64_t(c.blocks) * bw : bw;
     d->modules.push_back(std::move(blocks));
     if (m + 1 < c.modules) {
-      d->transitions.push_back(gat_step(L, "transitions." + std::to_string(m) + ".", c, device));
+      d->transitions.push_back(gat_step(L, "transitions." + std::to_string(m) + ".", c, device, precision));
       w = d->transitions.back().width();
     }
   }
   for (std::size_t k = 0; k < c.head.size(); ++k)
-    d->head.push_back(dense_step(L, "head." + std::to_string(k) + ".lin.", Activation::tanh, 0.f));
-  d->head.push_back(dense_step(L, "head." + std::to_string(c.head.size()) + ".", Activation::identity, 0.f));
+    d->head.push_back(dense_step(L, "head." + std::to_string(k) + ".lin.", Activation::tanh, 0.f, device, precision));
+  d->head.push_back(dense_step(L, "head." + std::to_string(c.head.size()) + ".", Activation::identity, 0.f, device, precision));
   GATCORE_CHECK(d->head.back().W.rows() == (d->head.size() > 1 ? c.head.back() : w), "deploy: model '", c.name,
                 "': head input width does not match the configuration");
   return d;
 }
 
 const ModelConfig& deploy_config(const DeployModel& m) { return m.cfg; }
+Precision deploy_precision(const DeployModel& m) { return m.precision; }
 Device deploy_device(const DeployModel& m) { return m.device; }
 std::int64_t deploy_parameter_count(const DeployModel& m) { return m.params; }
 
@@ -210,6 +240,7 @@ struct DeployPlan::Buffers {
   std::vector<Tensor> t_lin, t_act, h_lin, h_act;
   std::vector<Tensor> mod;
   Tensor z, both, tsh, el, er, alpha;  // GAT block scratch, reused by every block
+  Tensor zs;  // CPU: [z | self] from the one product of a GAT block
   std::vector<Tensor> o_z, o_y, o_act, o_el, o_er, o_alpha;  // origat, per layer
 };
 
@@ -242,7 +273,12 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
     for (std::size_t m = 0; m < M.modules.size(); ++m)
       B.mod.push_back(be.empty(n_, M.module_in[m] + std::int64_t(M.modules[m].size()) * M.modules[m].front().width()));
     const GatStep& g = M.modules.front().front();
-    B.z = be.empty(n_, g.kf());
+    if (M.device == Device::cpu) {
+      B.zs = be.empty(n_, g.width());
+      B.z = B.zs.cols_slice(0, g.kf());
+    } else {
+      B.z = be.empty(n_, g.kf());
+    }
     B.both = be.empty(n_, g.width());
     B.tsh = g.bn ? be.empty(n_, g.width()) : Tensor{};
     B.el = be.empty(n_, g.heads);
@@ -263,15 +299,23 @@ DeployPlan::~DeployPlan() {
 namespace {
 
 // nn::GatBlock::forward (eval) of `x` into `out`.
+// (CPU: z is the first kf columns of zs, whose last self_width columns get the self stream's product.)
 void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x, const Tensor& out, Tensor& z,
-               Tensor& both, Tensor& tsh, Tensor& el, Tensor& er, Tensor& alpha) {
+               const Tensor& zs, Tensor& both, Tensor& tsh, Tensor& el, Tensor& er, Tensor& alpha) {
   const std::int64_t kf = s.kf();
-  be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
+  const bool cpu = be.device() == Device::cpu;
+  if (cpu)
+    cpu::gemm_prepacked(x, s.Wp, zs);
+  else
+    be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
   be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
   be.gat_fused_additive_forward(g, z, el, er, s.slope, both.cols_slice(0, kf), alpha);
   if (s.self_width > 0) {
     const Tensor self = both.cols_slice(kf, kf + s.self_width);
-    be.gemm(x, false, s.self_W, false, self, 1.0f, 0.0f);
+    if (cpu)
+      be.copy(zs.cols_slice(kf, kf + s.self_width), self);
+    else
+      be.gemm(x, false, s.self_W, false, self, 1.0f, 0.0f);
     be.add_row_bias(s.self_b, self);
   }
   if (!s.bn) {
@@ -287,7 +331,10 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
 
 // nn::DenseLayer::forward (eval, folded) / Linear::forward of `x`.
 void dense_step(Backend& be, const DenseStep& s, const Tensor& x, const Tensor& lin, const Tensor& out) {
-  be.gemm(x, false, s.W, false, lin, 1.0f, 0.0f);
+  if (be.device() == Device::cpu)
+    cpu::gemm_prepacked(x, s.Wp, lin);
+  else
+    be.gemm(x, false, s.W, false, lin, 1.0f, 0.0f);
   be.add_row_bias(s.b, lin);
   if (s.act != Activation::identity) be.activation_forward(s.act, lin, out, s.slope);
 }
@@ -317,7 +364,10 @@ const Tensor& DeployPlan::run() {
     Tensor y = B.x;
     for (std::size_t l = 0; l < M.layers.size(); ++l) {
       const OriLayer& L = M.layers[l];
-      be.gemm(y, false, L.W, false, B.o_z[l], 1.0f, 0.0f);
+      if (M.device == Device::cpu)
+        cpu::gemm_prepacked(y, L.Wp, B.o_z[l]);
+      else
+        be.gemm(y, false, L.W, false, B.o_z[l], 1.0f, 0.0f);
       be.attention_projection_forward(B.o_z[l], L.att_dst, L.att_src, B.o_el[l], B.o_er[l]);
       be.gat_fused_additive_forward(g, B.o_z[l], B.o_el[l], B.o_er[l], 0.2f, B.o_y[l], B.o_alpha[l]);
       be.add_row_bias(L.b, B.o_y[l]);
@@ -341,14 +391,14 @@ const Tensor& DeployPlan::run() {
       std::int64_t c0 = M.module_in[m], prev = 0;
       for (const GatStep& s : M.modules[m]) {
         const Tensor input = M.dense ? buf.cols_slice(0, c0) : buf.cols_slice(prev, c0);
-        gat_block(be, g, s, input, buf.cols_slice(c0, c0 + bw), B.z, B.both, B.tsh, B.el, B.er, B.alpha);
+        gat_block(be, g, s, input, buf.cols_slice(c0, c0 + bw), B.z, B.zs, B.both, B.tsh, B.el, B.er, B.alpha);
         prev = c0;
         c0 += bw;
       }
       y = M.dense ? buf : buf.cols_slice(prev, c0);
       if (m + 1 < M.modules.size())
-        gat_block(be, g, M.transitions[m], y, B.mod[m + 1].cols_slice(0, M.module_in[m + 1]), B.z, B.both, B.tsh,
-                  B.el, B.er, B.alpha);
+        gat_block(be, g, M.transitions[m], y, B.mod[m + 1].cols_slice(0, M.module_in[m + 1]), B.z, B.zs, B.both,
+                  B.tsh, B.el, B.er, B.alpha);
     }
     for (std::size_t k = 0; k < M.head.size(); ++k) {
       dense_step(be, M.head[k], y, B.h_lin[k], B.h_act[k]);

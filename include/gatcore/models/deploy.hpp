@@ -12,7 +12,9 @@
 // DeployPlan: one character's graph and every intermediate tensor of a
 // forward pass for it, allocated once; run() calls the backend's forward
 // kernels straight into them in the order Model::forward does, so the results
-// are bitwise those of models::predict on the folded model (tested). One plan
+// are bitwise those of models::predict on the folded model in fp32 (tested;
+// the CPU's products with pre-packed weights are gemm()'s arithmetic), and
+// within bf16's rounding of it in bf16 (tested, test_runtime). One plan
 // per character and thread (it owns its workspace); plans of one DeployModel
 // may run concurrently on the CPU.
 //
@@ -25,6 +27,7 @@
 #include <vector>
 
 #include "gatcore/models/model.hpp"
+#include "gatcore/precision.hpp"
 #include "gatcore/models/sample.hpp"
 
 namespace gatcore::models {
@@ -35,11 +38,16 @@ struct DeployModel;
 bool deployable(const ModelConfig& cfg);
 // Folds `model`'s BatchNorms (the model is left folded: inference only) and
 // copies its weights to `device` (Device::cpu or an initialised Vulkan
-// backend). Throws InvalidArgument for models without a deploy path.
+// backend); on the CPU the weights are also packed once for the products
+// (kernels/gemm_prepacked.hpp) in `precision`. Throws InvalidArgument for
+// models without a deploy path, and for bf16 off the CPU or on a CPU without
+// AVX512_BF16 (bf16_supported()).
 std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normaliser& norm,
-                                                     Device device = Device::cpu);
+                                                     Device device = Device::cpu,
+                                                     Precision precision = Precision::fp32);
 const ModelConfig& deploy_config(const DeployModel& m);
 Device deploy_device(const DeployModel& m);
+Precision deploy_precision(const DeployModel& m);
 // Scalars in the deploy model (the folded model's parameter count).
 std::int64_t deploy_parameter_count(const DeployModel& m);
 

@@ -1,0 +1,157 @@
+// The AVX512_BF16 inference product (gemm_bf16.hpp): VDPBF16PS multiplies 16
+// pairs of bf16 values per instruction and adds both products into 16 fp32
+// accumulators, 32 multiply-adds where an fp32 FMA does 16, so the GEMMs of
+// the deploy path (GEMM-bound: ~70 % of a paper-size DenseGATs frame) run at
+// up to twice the fp32 rate.
+//
+// Blocking (as gemm_packed_avx512.cpp, halved operands): per call, rows in
+// blocks of kMc: the block's A rows are rounded to bf16 pairs once (all of
+// k, contiguous per row: kMc x k/2 words, in L2); B comes packed
+// (pack_b_bf16, at bind) in kBf16Kc x NR panels that stay in L1 while a
+// register tile of MR rows x NR columns (12 x 32, or 24 x 16 for n <= 16)
+// runs down the block. Each C element sums its k blocks in order, a function
+// of the shape only: results do not depend on the thread count.
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+
+#include "kernels/gemm_bf16.hpp"
+#include "kernels/target_region.hpp"
+
+#if defined(__x86_64__) && defined(__GNUC__)
+GATCORE_TARGET_BEGIN("avx512f,avx512bw,avx512vl,avx512bf16,avx2,fma")
+#include <immintrin.h>
+
+namespace gatcore::cpu::detail {
+namespace {
+
+constexpr std::int64_t kMc = 120;  // rows per block (a multiple of both register tiles' MR)
+
+inline __mmask16 lanes(std::int64_t rem) {
+  return rem >= 16 ? __mmask16(0xFFFF) : rem <= 0 ? __mmask16(0) : __mmask16((1u << rem) - 1u);
+}
+
+// Row r of A (k floats) as ceil(k/2) bf16 pair words (an odd k's last pair
+// has a zero high half: the masked load reads zeros past k).
+inline void convert_row(const float* a, std::int64_t k, std::uint32_t* dst) {
+  std::int64_t kk = 0;
+  for (; kk + 32 <= k; kk += 32) {
+    const __m512 lo = _mm512_loadu_ps(a + kk), hi = _mm512_loadu_ps(a + kk + 16);
+    _mm512_storeu_si512(dst + kk / 2, (__m512i)_mm512_cvtne2ps_pbh(hi, lo));
+  }
+  if (kk < k) {
+    const __m512 lo = _mm512_maskz_loadu_ps(lanes(k - kk), a + kk);
+    const __m512 hi = _mm512_maskz_loadu_ps(lanes(k - kk - 16), a + kk + 16);
+    _mm512_mask_storeu_epi32(dst + kk / 2, lanes((k - kk + 1) / 2), (__m512i)_mm512_cvtne2ps_pbh(hi, lo));
+  }
+}
+
+// C[0:mr_eff, 0:nr_eff] (+)= A tile . B panel over kp pairs: A tile row r at
+// a + r * lda (pair words), B panel kp x NR words.
+template <int MR, int NV>
+void micro_kernel(std::int64_t kp, const std::uint32_t* __restrict a, std::int64_t lda,
+                  const std::uint32_t* __restrict bp, float* c, std::int64_t ldc, int mr_eff, int nr_eff,
+                  bool accumulate) {
+  constexpr int NR = 16 * NV;
+  __m512 acc[MR][NV];
+#pragma GCC unroll 32
+  for (int r = 0; r < MR; ++r)
+#pragma GCC unroll 2
+    for (int v = 0; v < NV; ++v) acc[r][v] = _mm512_setzero_ps();
+  for (std::int64_t p = 0; p < kp; ++p) {
+    __m512bh b[NV];
+#pragma GCC unroll 2
+    for (int v = 0; v < NV; ++v) b[v] = (__m512bh)_mm512_load_si512(bp + p * NR + 16 * v);
+#pragma GCC unroll 32
+    for (int r = 0; r < MR; ++r) {
+      const __m512bh x = (__m512bh)_mm512_set1_epi32(int(a[r * lda + p]));
+#pragma GCC unroll 2
+      for (int v = 0; v < NV; ++v) acc[r][v] = _mm512_dpbf16_ps(acc[r][v], x, b[v]);
+    }
+  }
+  __mmask16 mask[NV];
+#pragma GCC unroll 2
+  for (int v = 0; v < NV; ++v) mask[v] = lanes(nr_eff - 16 * v);
+#pragma GCC unroll 32
+  for (int r = 0; r < MR; ++r) {
+    if (r >= mr_eff) break;
+    float* crow = c + r * ldc;
+#pragma GCC unroll 2
+    for (int v = 0; v < NV; ++v) {
+      __m512 x = acc[r][v];
+      if (accumulate) x = _mm512_add_ps(x, _mm512_maskz_loadu_ps(mask[v], crow + 16 * v));
+      _mm512_mask_storeu_ps(crow + 16 * v, mask[v], x);
+    }
+  }
+}
+
+struct Buffer {
+  std::uint32_t* a = nullptr;
+  std::int64_t words = 0;
+  ~Buffer() { std::free(a); }
+  std::uint32_t* get(std::int64_t w) {
+    if (w > words) {  // grows to the largest block seen, then reused (no allocation per frame)
+      std::free(a);
+      words = (w + 15) / 16 * 16;
+      a = static_cast<std::uint32_t*>(std::aligned_alloc(64, sizeof(std::uint32_t) * std::size_t(words)));
+    }
+    return a;
+  }
+};
+
+template <int MR, int NV>
+void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
+               std::int64_t n, float* c, std::int64_t ldc) {
+  constexpr int NR = 16 * NV;
+  static_assert(kMc % MR == 0, "row blocks are whole register tiles");
+  const std::int64_t kp_all = (k + 1) / 2;
+  const std::int64_t lda_w = (kp_all + 15) / 16 * 16;  // converted row stride (words; rows 64-byte aligned)
+  thread_local Buffer buf;
+  std::uint32_t* ab = buf.get(kMc * lda_w);
+  for (std::int64_t i0 = 0; i0 < m; i0 += kMc) {
+    const std::int64_t mc = std::min(kMc, m - i0);
+    for (std::int64_t r = 0; r < mc; ++r) convert_row(a + (i0 + r) * lda, k, ab + r * lda_w);
+    // Rows of the last partial register tile past m: zeros (read, never stored).
+    const std::int64_t mc_pad = (mc + MR - 1) / MR * MR;
+    std::fill(ab + mc * lda_w, ab + mc_pad * lda_w, 0u);
+    for (std::int64_t j0 = 0; j0 < n; j0 += kBf16Nc) {
+      const std::int64_t nc = std::min(kBf16Nc, n - j0);
+      for (std::int64_t k0 = 0; k0 < k; k0 += kBf16Kc) {
+        const std::int64_t kp = (std::min(kBf16Kc, k - k0) + 1) / 2;
+        const std::uint32_t* block = bp + packed_bf16_offset(k, j0, nc, k0, NR);
+        for (std::int64_t jr = 0; jr < nc; jr += NR) {
+          const int nr_eff = int(std::min<std::int64_t>(NR, nc - jr));
+          for (std::int64_t ir = 0; ir < mc; ir += MR)
+            micro_kernel<MR, NV>(kp, ab + ir * lda_w + k0 / 2, lda_w, block + jr * kp,
+                                 c + (i0 + ir) * ldc + j0 + jr, ldc, int(std::min<std::int64_t>(MR, mc - ir)),
+                                 nr_eff, k0 > 0);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
+                      std::int64_t n, float* c, std::int64_t ldc) {
+  if (m == 0 || n == 0) return;
+  if (bf16_nr(n) == 16)
+    gemm_rows<24, 1>(a, lda, m, k, bp, n, c, ldc);
+  else
+    gemm_rows<12, 2>(a, lda, m, k, bp, n, c, ldc);
+}
+
+void bf16_convert_avx512(const float* x, std::int64_t count, std::uint16_t* out) {
+  for (std::int64_t i = 0; i < count; i += 32) {
+    std::uint32_t w[16];
+    const std::int64_t rem = std::min<std::int64_t>(32, count - i);
+    convert_row(x + i, rem, w);
+    for (std::int64_t j = 0; j < rem; ++j) out[i + j] = std::uint16_t(j % 2 ? w[j / 2] >> 16 : w[j / 2] & 0xFFFFu);
+  }
+}
+
+}  // namespace gatcore::cpu::detail
+
+GATCORE_TARGET_END
+#endif

@@ -1,0 +1,113 @@
+// gemm_prepacked.hpp: packing once, dispatch per ISA, and the row-block threading.
+#include "kernels/gemm_prepacked.hpp"
+
+#include <algorithm>
+
+#include "gatcore/error.hpp"
+#include "kernels/gemm.hpp"
+#include "kernels/gemm_bf16.hpp"
+#include "kernels/gemm_impl.hpp"
+#include "kernels/nn_detail.hpp"
+#include "kernels/simd.hpp"
+
+namespace gatcore {
+
+const char* precision_name(Precision p) { return p == Precision::bf16 ? "bf16" : "fp32"; }
+
+Precision parse_precision(const std::string& s, const char* what) {
+  if (s == "fp32") return Precision::fp32;
+  if (s == "bf16") return Precision::bf16;
+  throw InvalidArgument(std::string(what) + ": '" + s + "' is not a precision (fp32, bf16)");
+}
+
+bool bf16_supported() { return cpu::simd_level() == cpu::SimdLevel::avx512 && cpu::detail::cpu_has_avx512_bf16(); }
+
+namespace cpu {
+
+namespace {
+// Rows per parallel task: whole register tiles of both kernels (12 / 24 rows),
+// small enough that 2k-vertex meshes still give each thread several tasks.
+constexpr std::int64_t kRowBlock = 120;
+// Below this many flops one thread does the product (as gemm()).
+constexpr double kParallelMinFlops = 4.0e6;
+}  // namespace
+
+PrepackedB prepack_b(const Tensor& B, Precision precision) {
+  check_cpu_f32(B, "prepack_b: B");
+  PrepackedB p;
+  p.k = B.rows();
+  p.n = B.cols();
+  p.precision = precision;
+  p.plain = B.clone();
+  if (precision == Precision::fp32) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (detected_simd_level() == SimdLevel::avx512 && p.k > 0 && p.n > 0) {
+      p.f32.resize(std::size_t(detail::prepacked_size_avx512(p.k, p.n)));
+      detail::GemmArgs g{nullptr, 0, p.k, 1, false, p.plain.data(), p.k, p.n, std::max<std::int64_t>(p.plain.ld(), 1),
+                         false, nullptr, 0, p.n, 0, 1.0f, 0.0f};
+      detail::prepack_b_avx512(g, p.f32.data());
+    }
+#endif
+    return p;
+  }
+  for (std::int64_t r = 0; r < p.k; ++r) {
+    float* row = p.plain.row(r);
+    for (std::int64_t j = 0; j < p.n; ++j) row[j] = bf16_round(row[j]);
+  }
+  if (detail::cpu_has_avx512_bf16() && p.k > 0 && p.n > 0) {
+    p.bf16.resize(std::size_t(detail::packed_bf16_words(p.k, p.n)));
+    detail::pack_b_bf16(p.plain.data(), p.plain.ld(), p.k, p.n, p.bf16.data());
+  }
+  return p;
+}
+
+void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C) {
+  check_cpu_f32(A, "gemm_prepacked: A");
+  check_cpu_f32(C, "gemm_prepacked: C");
+  const std::int64_t m = A.rows(), k = A.cols(), n = B.n;
+  GATCORE_CHECK(k == B.k, "gemm_prepacked: A ", A.shape_str(), " has ", k, " columns, the packed B has ", B.k, " rows");
+  GATCORE_CHECK(C.rows() == m && C.cols() == n, "gemm_prepacked: C: expected shape [", m, ", ", n, "], got ",
+                C.shape_str());
+  GATCORE_CHECK(!detail::views_overlap(C, A), "gemm_prepacked: C ", C.shape_str(), " overlaps A ", A.shape_str(),
+                " (the output must not alias an input)");
+  if (m == 0 || n == 0) return;
+  if (k == 0) {
+    for (std::int64_t r = 0; r < m; ++r) std::fill(C.row(r), C.row(r) + n, 0.0f);
+    return;
+  }
+  const float* a = A.data();
+  float* c = C.data();
+  const std::int64_t lda = std::max<std::int64_t>(A.ld(), 1), ldc = C.ld();
+  enum class Path { gemm, f32, bf16, bf16_portable } path = Path::gemm;
+  if (B.precision == Precision::fp32)
+    path = !B.f32.empty() && detail::gemm_uses_packed_avx512() ? Path::f32 : Path::gemm;
+  else
+    path = !B.bf16.empty() && bf16_supported() ? Path::bf16 : Path::bf16_portable;
+  if (path == Path::gemm) {  // the same kernel choice as gemm() makes, on the plain copy
+    gemm(A, false, B.plain, false, C, 1.0f, 0.0f);
+    return;
+  }
+  const std::int64_t blocks = (m + kRowBlock - 1) / kRowBlock;
+  const double flops = 2.0 * double(m) * double(n) * double(k);
+#pragma omp parallel for schedule(static) if (blocks > 1 && flops >= kParallelMinFlops)
+  for (std::int64_t blk = 0; blk < blocks; ++blk) {
+    const std::int64_t i0 = blk * kRowBlock, rows = std::min(kRowBlock, m - i0);
+    switch (path) {
+#if defined(__x86_64__) && defined(__GNUC__)
+      case Path::f32: {
+        detail::GemmArgs g{a + i0 * lda, rows, k,   lda,  false, B.plain.data(), k,    n,
+                           B.plain.ld(), false, c + i0 * ldc, rows, n, ldc, 1.0f, 0.0f};
+        detail::gemm_prepacked_avx512(g, B.f32.data());
+        break;
+      }
+      case Path::bf16: detail::gemm_bf16_avx512(a + i0 * lda, lda, rows, k, B.bf16.data(), n, c + i0 * ldc, ldc); break;
+#endif
+      default:
+        detail::gemm_bf16_portable(a + i0 * lda, lda, rows, k, B.plain.data(), B.plain.ld(), n, c + i0 * ldc, ldc);
+        break;
+    }
+  }
+}
+
+}  // namespace cpu
+}  // namespace gatcore

@@ -1,0 +1,57 @@
+#pragma once
+// Inference GEMM with a constant right-hand operand (a layer's weights):
+//   C = A B,  A [m, k] row-major (strided views allowed), B [k, n].
+// The weights are packed once (prepack_b) into the layout the product's
+// kernel reads, instead of on every call as gemm() must for operands that
+// change (training). Precision::fp32 runs gemm()'s own kernel with the packing
+// hoisted, so the results equal gemm(A, false, B, false, C) bitwise whenever
+// gemm() does not split k (k < 2000, or C larger than one 512 x 512 tile);
+// Precision::bf16 rounds both operands to bfloat16 and accumulates in fp32
+// (gemm_bf16.hpp), natively on AVX512_BF16 CPUs, emulated elsewhere (same
+// rounding, far slower: callers pick bf16 only when bf16_supported()).
+// Threads: rows in fixed blocks over OpenMP; no result depends on the thread count.
+// Not for training: there is no backward, and the deploy path is its only user.
+#include <cstdint>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "gatcore/precision.hpp"
+#include "gatcore/tensor.hpp"
+
+namespace gatcore::cpu {
+
+// 64-byte aligned storage: the kernels read packed panels with aligned
+// full-vector loads.
+template <class T>
+struct Aligned64 {
+  using value_type = T;
+  Aligned64() = default;
+  template <class U>
+  Aligned64(const Aligned64<U>&) {}
+  T* allocate(std::size_t n) {
+    void* p = std::aligned_alloc(64, (n * sizeof(T) + 63) / 64 * 64);
+    if (!p) throw std::bad_alloc();
+    return static_cast<T*>(p);
+  }
+  void deallocate(T* p, std::size_t) { std::free(p); }
+  template <class U>
+  bool operator==(const Aligned64<U>&) const { return true; }
+};
+
+struct PrepackedB {
+  std::int64_t k = 0, n = 0;
+  Precision precision = Precision::fp32;
+  // fp32: B itself (gemm() runs on it when the packed AVX-512 kernel is not
+  // the GEMM in use); bf16: B rounded to bf16 values (the emulated product).
+  Tensor plain;
+  std::vector<float, Aligned64<float>> f32;                  // fp32 panels (AVX-512 CPUs)
+  std::vector<std::uint32_t, Aligned64<std::uint32_t>> bf16;  // bf16 pair panels (AVX512_BF16 CPUs)
+};
+
+// B: a [k, n] CPU f32 tensor (copied; B may change or go away afterwards).
+PrepackedB prepack_b(const Tensor& B, Precision precision);
+// C [m, n] = A [m, k] times the packed B. C must not overlap A.
+void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C);
+
+}  // namespace gatcore::cpu
