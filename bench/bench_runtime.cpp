@@ -7,6 +7,8 @@
 // 8 heads x 8, head 512-128; ~714k parameters on the real dataset's 56
 // bones), "distilled" = Ori.GAT with its defaults (4 layers, 8 heads x 8;
 // the `gat distill` student). Fresh weights: speed does not depend on them.
+// "_bf16": the same with Precision::bf16 products (AVX512_BF16 CPUs; skipped
+// with an error elsewhere).
 // Counters: features_ms / model_ms per frame (Deformer::last_timing), the
 // vertex count actually generated, the model's parameters.
 #include <benchmark/benchmark.h>
@@ -55,7 +57,7 @@ struct RuntimeCase {
   std::vector<float> globals, out;
 };
 
-RuntimeCase make_case(const std::string& which, std::int64_t vertices) {
+RuntimeCase make_case(const std::string& which, std::int64_t vertices, Precision precision) {
   RuntimeCase c;
   c.ch = humanoid_near(vertices);
   std::vector<std::string> bones;
@@ -72,7 +74,8 @@ RuntimeCase make_case(const std::string& which, std::int64_t vertices) {
                     ("gatbench_runtime_" + which + "_" + std::to_string(::getpid()) + ".gcm");
   models::save_checkpoint(path.string(), *m, norm, nullptr,
                           {{"features", "densegats"}, {"skeleton", joined}, {"distortion_scales", "1,4,16"}});
-  c.d = std::make_unique<runtime::Deformer>(runtime::Deformer::load(path.string()));
+  c.d = std::make_unique<runtime::Deformer>(
+      runtime::Deformer::load(path.string(), runtime::DeviceChoice::cpu, precision));
   std::filesystem::remove(path);
   c.d->bind(c.ch.mesh, c.ch.skeleton);
   // A walking-like pose: every joint turned a little, the root moved.
@@ -86,10 +89,14 @@ RuntimeCase make_case(const std::string& which, std::int64_t vertices) {
   return c;
 }
 
-void runtime_deform(benchmark::State& state, const std::string& which) {
+void runtime_deform(benchmark::State& state, const std::string& which, Precision precision) {
   const std::int64_t target = state.range(0);
-  auto& c = const_cast<RuntimeCase&>(
-      gatbench::cached<RuntimeCase>(which + std::to_string(target), [&] { return make_case(which, target); }));
+  if (precision == Precision::bf16 && !bf16_supported()) {
+    state.SkipWithError("bf16: this CPU has no AVX512_BF16");
+    return;
+  }
+  auto& c = const_cast<RuntimeCase&>(gatbench::cached<RuntimeCase>(
+      which + precision_name(precision) + std::to_string(target), [&] { return make_case(which, target, precision); }));
   const std::int64_t n = c.ch.mesh.num_vertices();
   state.SetLabel(std::to_string(n) + " vertices, " + std::to_string(c.d->parameter_count()) + " parameters");
   double features = 0, model = 0;
@@ -105,9 +112,13 @@ void runtime_deform(benchmark::State& state, const std::string& which) {
   state.counters["vertices"] = double(n);
 }
 
-BENCHMARK_CAPTURE(runtime_deform, paper, std::string("paper"))
+BENCHMARK_CAPTURE(runtime_deform, paper, std::string("paper"), Precision::fp32)
     ->ArgName("verts")->Arg(2000)->Arg(5000)->Arg(10000)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(runtime_deform, distilled, std::string("distilled"))
+BENCHMARK_CAPTURE(runtime_deform, distilled, std::string("distilled"), Precision::fp32)
+    ->ArgName("verts")->Arg(2000)->Arg(5000)->Arg(10000)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(runtime_deform, paper_bf16, std::string("paper"), Precision::bf16)
+    ->ArgName("verts")->Arg(2000)->Arg(5000)->Arg(10000)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(runtime_deform, distilled_bf16, std::string("distilled"), Precision::bf16)
     ->ArgName("verts")->Arg(2000)->Arg(5000)->Arg(10000)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace

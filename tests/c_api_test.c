@@ -42,6 +42,13 @@ int main(void) {
   EXPECT(gatcore_deformer_load(wmodel, GATCORE_DEVICE_CPU, &d) == GATCORE_ERROR_MODEL);
   EXPECT(strstr(gatcore_last_error(), "densegats") != NULL);
   EXPECT(strcmp(gatcore_status_name(GATCORE_ERROR_STATE), "GATCORE_ERROR_STATE") == 0);
+  /* bf16 where the CPU has AVX512_BF16, else a device error (from C too). */
+  {
+    gatcore_deformer* b = NULL;
+    const gatcore_status st = gatcore_deformer_load_precision(model, GATCORE_DEVICE_CPU, GATCORE_PRECISION_BF16, &b);
+    EXPECT(st == (gatcore_bf16_supported() ? GATCORE_OK : GATCORE_ERROR_DEVICE));
+    gatcore_deformer_destroy(b);
+  }
 
   EXPECT(gatcore_deformer_load(model, GATCORE_DEVICE_CPU, &d) == GATCORE_OK);
   EXPECT(strcmp(gatcore_last_error(), "") == 0);

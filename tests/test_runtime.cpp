@@ -224,6 +224,115 @@ TEST_CASE("runtime::Deformer gives gat deform's numbers bitwise", "[runtime]") {
   }
 }
 
+// Offsets of `test` against `ref` on `ch` over 3 poses: mean |error| / mean
+// |correction| and max |error| / max |correction| (per-vertex 3D lengths;
+// correction = ref's output minus LBS).
+struct OffsetError {
+  double mean_rel = 0, max_rel = 0;
+};
+OffsetError offset_error(runtime::Deformer& ref, runtime::Deformer& test, const Character& ch) {
+  const std::size_t n = std::size_t(ref.num_vertices());
+  std::vector<float> a(3 * n), b(3 * n), lbs(3 * n);
+  double worst = 0, sum_err = 0, sum_corr = 0, max_corr = 0;
+  for (int f = 0; f < 3; ++f) {
+    const std::vector<float> g = globals_of(ch.skeleton, test_pose(ch.skeleton, f));
+    ref.deform(g, a, {}, lbs);
+    test.deform(g, b);
+    for (std::size_t v = 0; v < n; ++v) {
+      double e = 0, c = 0;
+      for (std::size_t k = 0; k < 3; ++k) {
+        e += std::pow(double(b[3 * v + k]) - a[3 * v + k], 2);
+        c += std::pow(double(a[3 * v + k]) - lbs[3 * v + k], 2);
+      }
+      worst = std::max(worst, std::sqrt(e));
+      max_corr = std::max(max_corr, std::sqrt(c));
+      sum_err += std::sqrt(e);
+      sum_corr += std::sqrt(c);
+    }
+  }
+  REQUIRE(max_corr > 0);
+  return {sum_err / sum_corr, worst / max_corr};
+}
+
+// A fresh checkpoint of `name` at its default (paper) sizes on `bones` with
+// distortion scales 1,4,16; with `bf16_weights` its weights rounded to bf16
+// values first (what storing them in bf16 would do).
+std::string default_checkpoint(const std::string& name, const std::vector<std::string>& bones, bool bf16_weights) {
+  models::ModelConfig cfg = models::ModelConfig::defaults(name, 6 + std::int64_t(bones.size()) + 9, 3);
+  auto m = models::make_model(cfg, 11);
+  if (bf16_weights)
+    for (auto& p : m->registry().params) {
+      const Tensor t = p.var.value();
+      for (std::int64_t r = 0; r < t.rows(); ++r)
+        for (std::int64_t c = 0; c < t.cols(); ++c) {
+          std::uint32_t u;
+          std::memcpy(&u, &t.at(r, c), 4);
+          u = (u + 0x7FFFu + ((u >> 16) & 1u)) & 0xFFFF0000u;  // nearest even (finite, normal values)
+          std::memcpy(&t.at(r, c), &u, 4);
+        }
+    }
+  models::Normaliser norm;
+  norm.mean = Tensor::zeros(1, cfg.in_dim);
+  norm.inv_std = Tensor::full(1, cfg.in_dim, 1.f);
+  const std::string path = tmp(name + (bf16_weights ? "_paper_bf16w.gcm" : "_paper.gcm"));
+  models::save_checkpoint(path, *m, norm, nullptr,
+                          {{"features", "densegats"}, {"skeleton", joined(bones)}, {"distortion_scales", "1,4,16"}});
+  return path;
+}
+
+TEST_CASE("runtime::Deformer in bf16: offsets within bf16's rounding of fp32's", "[runtime][bf16]") {
+  // bf16 keeps 8 mantissa bits: each product operand is off by at most 2^-9
+  // relative. How far that moves the output is the model's own sensitivity.
+  // Ori.GAT (4 layers) is well conditioned: its offsets should move by a
+  // fraction of a percent (bound: mean 1 %, worst vertex 2 % of the largest
+  // correction; measured ~0.3 % / 0.4 %). The paper-size DenseGATs with fresh
+  // weights (20 products deep, dense concatenation) is not: rounding only its
+  // weights to bf16 and running in fp32 moves its offsets by ~5 % (mean) and
+  // up to ~80 % of the largest correction (trained checkpoints move far less:
+  // bench/RESULTS.md, ~0.1 %). So its bound is relative to that sensitivity:
+  // bf16 products (weights and activations rounded) may add at most twice the
+  // error of bf16 weights alone (measured: below it). A wrong kernel (a lost
+  // pair, a wrong panel) would give errors of the order of the correction.
+  if (!bf16_supported()) {
+    WARN("SKIPPED: this CPU has no AVX512_BF16; runtime bf16 is refused there (checked below)");
+    const Character ch = humanoid(3);
+    CHECK_THROWS_WITH(runtime::Deformer::load(corrective_checkpoint("origat", bone_names(ch.skeleton), "none", 0),
+                                              runtime::DeviceChoice::cpu, Precision::bf16),
+                      Contains("AVX512_BF16"));
+    return;
+  }
+  const Character ch = humanoid(3);
+  const std::vector<std::string> bones = bone_names(ch.skeleton);
+  for (const char* name : {"origat", "densegats"}) {
+    INFO("model " << name);
+    const std::string path = default_checkpoint(name, bones, false);
+    runtime::Deformer f32 = runtime::Deformer::load(path);
+    runtime::Deformer b16 = runtime::Deformer::load(path, runtime::DeviceChoice::cpu, Precision::bf16);
+    CHECK(f32.precision() == Precision::fp32);
+    CHECK(b16.precision() == Precision::bf16);
+    f32.bind(ch.mesh, ch.skeleton);
+    b16.bind(ch.mesh, ch.skeleton);
+    const OffsetError e = offset_error(f32, b16, ch);
+    WARN(name << " bf16 vs fp32: mean |offset error| / mean |correction| = " << e.mean_rel
+              << ", max |offset error| / max |correction| = " << e.max_rel);
+    CHECK(e.mean_rel > 0);  // bf16 really ran (fp32 products would give 0)
+    if (std::string(name) == "origat") {
+      CHECK(e.mean_rel < 0.01);
+      CHECK(e.max_rel < 0.02);
+    } else {
+      runtime::Deformer w16 = runtime::Deformer::load(default_checkpoint(name, bones, true));
+      w16.bind(ch.mesh, ch.skeleton);
+      const OffsetError s = offset_error(f32, w16, ch);
+      WARN(name << " fp32 with bf16-rounded weights: mean " << s.mean_rel << ", max " << s.max_rel);
+      CHECK(e.mean_rel < 2 * s.mean_rel);
+      CHECK(e.max_rel < 2 * s.max_rel);
+    }
+  }
+  CHECK_THROWS_WITH(runtime::Deformer::load(default_checkpoint("origat", bones, false), runtime::DeviceChoice::cpu,
+                                            parse_precision("fp16")),
+                    Contains("'fp16' is not a precision"));
+}
+
 TEST_CASE("runtime::Deformer::deform allocates nothing after bind", "[runtime]") {
   const Character ch = humanoid(4);
   const std::vector<std::string> bones = bone_names(ch.skeleton);
@@ -375,6 +484,33 @@ TEST_CASE("the C API gives the C++ runtime's numbers and its errors as codes", "
   CHECK(gatcore_deformer_deform(d, nullptr, J, nullptr, nullptr, n) == GATCORE_ERROR_INVALID_ARGUMENT);
   CHECK_THAT(std::string(gatcore_last_error()), Contains("must not be NULL"));
   gatcore_deformer_destroy(d);
+
+  // Precision: FP32 is gatcore_deformer_load; BF16 runs where the CPU has
+  // AVX512_BF16 (the C++ runtime's bf16 numbers) and is a device error elsewhere.
+  gatcore_deformer* e = nullptr;
+  CHECK(gatcore_deformer_load_precision(path.c_str(), GATCORE_DEVICE_CPU, gatcore_precision(7), &e) ==
+        GATCORE_ERROR_INVALID_ARGUMENT);
+  CHECK_THAT(std::string(gatcore_last_error()), Contains("unknown precision 7"));
+  CHECK(gatcore_bf16_supported() == (bf16_supported() ? 1 : 0));
+  const gatcore_status st = gatcore_deformer_load_precision(path.c_str(), GATCORE_DEVICE_CPU, GATCORE_PRECISION_BF16, &e);
+  if (!bf16_supported()) {
+    CHECK(st == GATCORE_ERROR_DEVICE);
+    CHECK_THAT(std::string(gatcore_last_error()), Contains("AVX512_BF16"));
+    CHECK(e == nullptr);
+    return;
+  }
+  REQUIRE(st == GATCORE_OK);
+  REQUIRE(gatcore_deformer_bind(e, &mesh, &sk, nullptr, 0) == GATCORE_OK);
+  runtime::Deformer ref16 = runtime::Deformer::load(path, runtime::DeviceChoice::cpu, Precision::bf16);
+  ref16.bind(ch.mesh, ch.skeleton);
+  const std::vector<float> g = globals_of(s, test_pose(s, 1));
+  std::vector<float> a(std::size_t(3 * n)), b(a.size()), c(a.size());
+  ref16.deform(g, a);
+  ref.deform(g, c);
+  REQUIRE(gatcore_deformer_deform(e, g.data(), J, b.data(), nullptr, n) == GATCORE_OK);
+  CHECK(a == b);
+  CHECK(a != c);  // bf16, not fp32
+  gatcore_deformer_destroy(e);
 }
 
 // Writes the checkpoints the C test (tests/c_api_test.c) loads: a corrective
@@ -426,3 +562,4 @@ TEST_CASE("runtime::Deformer on Vulkan matches the CPU", "[runtime][vulkan]") {
     }
   }
 }
+

@@ -40,6 +40,7 @@
 #include "gatcore/character/rig/mesh.hpp"
 #include "gatcore/character/rig/skeleton.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
+#include "gatcore/precision.hpp"
 #include "gatcore/tensor.hpp"
 
 namespace gatcore::runtime {
@@ -66,7 +67,12 @@ class Deformer {
  public:
   // Loads a displacement checkpoint. Throws naming the file for a missing /
   // corrupt file or a model that does not predict displacements.
-  static Deformer load(const std::string& checkpoint, DeviceChoice device = DeviceChoice::cpu);
+  // precision: of the model's products (gatcore/precision.hpp). fp32 gives
+  // gat deform's numbers bitwise; bf16 (CPU device, AVX512_BF16 CPUs only:
+  // bf16_supported(); InvalidArgument otherwise) about twice the products'
+  // speed, at an offset error of ~0.5 % of the correction (bench/RESULTS.md).
+  static Deformer load(const std::string& checkpoint, DeviceChoice device = DeviceChoice::cpu,
+                       Precision precision = Precision::fp32);
   // A new, unbound deformer sharing this one's loaded model.
   Deformer share() const;
   Deformer(Deformer&&) noexcept;
@@ -94,6 +100,7 @@ class Deformer {
   const std::vector<std::string>& bones() const;
   std::int64_t parameter_count() const;
   Device device() const;
+  Precision precision() const;
   // Joints of the bound character that matched a model bone.
   std::int32_t mapped_joints() const;
 

@@ -197,6 +197,28 @@ gatcore_status gatcore_deformer_load(const char* checkpoint, gatcore_device devi
                  [&] { *out = new gatcore_deformer{runtime::Deformer::load(checkpoint, dc)}; });
 }
 
+gatcore_status gatcore_deformer_load_precision(const char* checkpoint, gatcore_device device,
+                                               gatcore_precision precision, gatcore_deformer** out) {
+  static const char* fn = "gatcore_deformer_load_precision";
+  GATCORE_C_REQUIRE(checkpoint && out, fn, ": checkpoint and out must not be NULL");
+  GATCORE_C_REQUIRE(precision == GATCORE_PRECISION_FP32 || precision == GATCORE_PRECISION_BF16, fn,
+                    ": unknown precision ", int(precision));
+  runtime::DeviceChoice dc{};
+  if (gatcore_status s = device_of(fn, device, dc); s != GATCORE_OK) return s;
+  const Precision p = precision == GATCORE_PRECISION_BF16 ? Precision::bf16 : Precision::fp32;
+  if (p == Precision::bf16) {
+    // Device problems are the device's code, not the model's.
+    if (!bf16_supported())
+      return fail(GATCORE_ERROR_DEVICE, std::string(fn) + ": GATCORE_PRECISION_BF16 needs a CPU with AVX512_BF16; "
+                                                          "this one has none (use GATCORE_PRECISION_FP32)");
+    if (runtime::resolve_device(dc) != Device::cpu)
+      return fail(GATCORE_ERROR_DEVICE, std::string(fn) + ": GATCORE_PRECISION_BF16 runs on the CPU device only");
+  }
+  return guarded(fn, GATCORE_ERROR_MODEL, [&] { *out = new gatcore_deformer{runtime::Deformer::load(checkpoint, dc, p)}; });
+}
+
+int32_t gatcore_bf16_supported(void) { return bf16_supported() ? 1 : 0; }
+
 gatcore_status gatcore_deformer_share(const gatcore_deformer* src, gatcore_deformer** out) {
   GATCORE_C_REQUIRE(src && out, "gatcore_deformer_share: src and out must not be NULL");
   return guarded("gatcore_deformer_share", GATCORE_ERROR_INVALID_ARGUMENT,

@@ -76,7 +76,7 @@ Deformer::Deformer(Deformer&&) noexcept = default;
 Deformer& Deformer::operator=(Deformer&&) noexcept = default;
 Deformer::~Deformer() = default;
 
-Deformer Deformer::load(const std::string& path, DeviceChoice device) {
+Deformer Deformer::load(const std::string& path, DeviceChoice device, Precision precision) {
   const Device dev = resolve_device(device);
   models::LoadedModel lm = models::load_checkpoint(path);
   auto m = std::make_shared<LoadedCorrective>();
@@ -84,7 +84,7 @@ Deformer Deformer::load(const std::string& path, DeviceChoice device) {
   m->scales = checkpoint_distortion_scales(lm.file, path);
   GATCORE_CHECK(models::deployable(lm.model->config()), path, ": model '", lm.model->config().name,
                 "' has no runtime path (densegats, densegats-noself, densegats-nodense, origat)");
-  m->model = models::make_deploy_model(*lm.model, lm.norm, dev);
+  m->model = models::make_deploy_model(*lm.model, lm.norm, dev, precision);
   m->path = path;
   return Deformer(std::move(m));
 }
@@ -136,6 +136,7 @@ const std::string& Deformer::model_name() const { return models::deploy_config(*
 const std::vector<std::string>& Deformer::bones() const { return model_->bones; }
 std::int64_t Deformer::parameter_count() const { return models::deploy_parameter_count(*model_->model); }
 Device Deformer::device() const { return models::deploy_device(*model_->model); }
+Precision Deformer::precision() const { return models::deploy_precision(*model_->model); }
 std::int32_t Deformer::mapped_joints() const { return bound_ ? bound_->mapping.num_mapped() : 0; }
 
 void Deformer::deform(std::span<const float> joint_globals, std::span<float> out, std::span<float> out_normals,
