@@ -9,32 +9,31 @@
 namespace gatcore::cpu::detail {
 
 std::int64_t packed_bf16_words(std::int64_t k, std::int64_t n) {
-  const int nr = bf16_nr(n);
   std::int64_t words = 0;
-  for (std::int64_t j0 = 0; j0 < n; j0 += kBf16Nc)
-    words += (k + 1) / 2 * ((std::min(kBf16Nc, n - j0) + nr - 1) / nr * nr);
+  for (std::int64_t j0 = 0; j0 < n; j0 += kBf16Nc) words += (k + 1) / 2 * bf16_ncpad(std::min(kBf16Nc, n - j0));
   return words;
 }
 
 void pack_b_bf16(const float* b, std::int64_t ldb, std::int64_t k, std::int64_t n, std::uint32_t* dst) {
-  const int nr = bf16_nr(n);
   auto at = [&](std::int64_t kk, std::int64_t j) -> std::uint32_t {
     return kk < k && j < n ? bf16_bits(b[kk * ldb + j]) : 0u;  // zero padding
   };
   for (std::int64_t j0 = 0; j0 < n; j0 += kBf16Nc) {
     const std::int64_t nc = std::min(kBf16Nc, n - j0);
-    const std::int64_t ncpad = (nc + nr - 1) / nr * nr;
+    const std::int64_t ncpad = bf16_ncpad(nc);
     for (std::int64_t k0 = 0; k0 < k; k0 += kBf16Kc) {
       const std::int64_t kp = (std::min(kBf16Kc, k - k0) + 1) / 2;
-      std::uint32_t* block = dst + packed_bf16_offset(k, j0, nc, k0, nr);
-      for (std::int64_t jr = 0; jr < ncpad; jr += nr)
+      std::uint32_t* block = dst + packed_bf16_offset(k, j0, nc, k0);
+      for (std::int64_t jr = 0, w = 0; jr < ncpad; jr += w) {
+        w = bf16_panel_width(nc, jr);
         for (std::int64_t p = 0; p < kp; ++p)
-          for (int c = 0; c < nr; ++c) {
+          for (std::int64_t c = 0; c < w; ++c) {
             const std::int64_t j = j0 + jr + c, kk = k0 + 2 * p;
             // Padding columns inside the block (j >= j0 + nc) are zero too.
             const bool in = jr + c < nc;
-            block[jr * kp + p * nr + c] = in ? (at(kk, j) | (at(kk + 1, j) << 16)) : 0u;
+            block[jr * kp + p * w + c] = in ? (at(kk, j) | (at(kk + 1, j) << 16)) : 0u;
           }
+      }
     }
   }
 }

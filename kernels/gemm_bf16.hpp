@@ -36,17 +36,24 @@ inline float bf16_round(float x) { return bf16_to_float(bf16_bits(x)); }
 namespace detail {
 
 // Layout of a packed bf16 B ([k, n] row-major source): column blocks of
-// kBf16Nc, each its k blocks of kBf16Kc (even) in order; a block holds
-// NR-column panels, each kp = ceil(kc / 2) rows of NR 32-bit words, word
-// (p, j) = (B[k0 + 2p, j] low half, B[k0 + 2p + 1, j] high half) as bf16
-// (an odd k's last pair has a zero high half): the operand VDPBF16PS
-// multiplies pairwise with a broadcast (A[i, 2p], A[i, 2p + 1]).
+// kBf16Nc, each its k blocks of kBf16Kc (even) in order; a block's columns,
+// zero-padded to a multiple of 16, are cut into panels of bf16_panel_width
+// columns, each kp = ceil(kc / 2) rows of that many 32-bit words, word (p, j) =
+// (B[k0 + 2p, j] low half, B[k0 + 2p + 1, j] high half) as bf16 (an odd k's
+// last pair has a zero high half): the operand VDPBF16PS multiplies pairwise
+// with a broadcast (A[i, 2p], A[i, 2p + 1]). Panels are 32 wide (two vectors
+// per row), the last one 16 wide when 16 columns are left: a GAT block's
+// 72 columns (64 + the 8-wide self stream) are 32 + 32 + 16, not 3 x 32.
 constexpr std::int64_t kBf16Kc = 384;  // 192 pairs: a 32-wide panel is 24 KiB, kept in L1
 constexpr std::int64_t kBf16Nc = 512;
-inline int bf16_nr(std::int64_t n) { return n <= 16 ? 16 : 32; }
+inline std::int64_t bf16_ncpad(std::int64_t nc) { return (nc + 15) / 16 * 16; }
+// Width of the panel starting at column jr of a block of nc columns.
+inline int bf16_panel_width(std::int64_t nc, std::int64_t jr) { return bf16_ncpad(nc) - jr >= 32 ? 32 : 16; }
 std::int64_t packed_bf16_words(std::int64_t k, std::int64_t n);
-inline std::int64_t packed_bf16_offset(std::int64_t k, std::int64_t j0, std::int64_t nc, std::int64_t k0, int nr) {
-  return j0 * ((k + 1) / 2) + (k0 / 2) * ((nc + nr - 1) / nr * nr);
+// Start of the block (column block j0 of width nc, k block k0); its panel at
+// column jr starts jr * kp words further.
+inline std::int64_t packed_bf16_offset(std::int64_t k, std::int64_t j0, std::int64_t nc, std::int64_t k0) {
+  return j0 * ((k + 1) / 2) + (k0 / 2) * bf16_ncpad(nc);
 }
 void pack_b_bf16(const float* b, std::int64_t ldb, std::int64_t k, std::int64_t n, std::uint32_t* dst);
 
@@ -55,9 +62,16 @@ bool cpu_has_avx512_bf16();
 
 // Rows [0, m) of C = A B: A [m, k] fp32 (ld lda, rounded to bf16 here), B
 // packed by pack_b_bf16, C [m, n] (ld ldc) overwritten. Serial (the caller
-// threads over row ranges).
+// threads over row ranges). With `aw` non-null, A is read from there instead,
+// already as bf16 pair words (row i at aw + i * ldw, ceil(k/2) words; rows up
+// to m rounded up to 24 must be readable: a partial register tile reads them
+// into rows it does not store).
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
-                      std::int64_t n, float* c, std::int64_t ldc);
+                      std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw = nullptr,
+                      std::int64_t ldw = 0);
+// x[0, count) as ceil(count/2) bf16 pair words (AVX512_BF16 CPUs only; the
+// conversion gemm_bf16_avx512 applies to A's rows).
+void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out);
 // The same product without AVX512_BF16: `b` is B [k, n] already rounded to
 // bf16 values (ld ldb); each pair accumulated as VDPBF16PS's definition
 // does (C += A[2p+1] B[2p+1], then += A[2p] B[2p]; products of bf16 values

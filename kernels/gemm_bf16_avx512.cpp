@@ -8,8 +8,8 @@
 // blocks of kMc: the block's A rows are rounded to bf16 pairs once (all of
 // k, contiguous per row: kMc x k/2 words, in L2); B comes packed
 // (pack_b_bf16, at bind) in kBf16Kc x NR panels that stay in L1 while a
-// register tile of MR rows x NR columns (12 x 32, or 24 x 16 for n <= 16)
-// runs down the block. Each C element sums its k blocks in order, a function
+// register tile of MR rows x NR columns (12 x 32; 12 x 16 for a 16-wide last
+// panel; 24 x 16 when n <= 16) runs down the block. Each C element sums its k blocks in order, a function
 // of the shape only: results do not depend on the thread count.
 #include <algorithm>
 #include <cstdint>
@@ -99,32 +99,42 @@ struct Buffer {
   }
 };
 
-template <int MR, int NV>
+// MR: rows of the register tile (12, or 24 when n <= 16 and every panel is 16 wide).
+template <int MR>
 void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
-               std::int64_t n, float* c, std::int64_t ldc) {
-  constexpr int NR = 16 * NV;
+               std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw) {
   static_assert(kMc % MR == 0, "row blocks are whole register tiles");
   const std::int64_t kp_all = (k + 1) / 2;
-  const std::int64_t lda_w = (kp_all + 15) / 16 * 16;  // converted row stride (words; rows 64-byte aligned)
+  // Converted row stride (words; rows 64-byte aligned), or the caller's pre-converted rows.
+  const std::int64_t lda_w = aw ? ldw : (kp_all + 15) / 16 * 16;
   thread_local Buffer buf;
-  std::uint32_t* ab = buf.get(kMc * lda_w);
+  std::uint32_t* conv = aw ? nullptr : buf.get(kMc * lda_w);
   for (std::int64_t i0 = 0; i0 < m; i0 += kMc) {
     const std::int64_t mc = std::min(kMc, m - i0);
-    for (std::int64_t r = 0; r < mc; ++r) convert_row(a + (i0 + r) * lda, k, ab + r * lda_w);
-    // Rows of the last partial register tile past m: zeros (read, never stored).
-    const std::int64_t mc_pad = (mc + MR - 1) / MR * MR;
-    std::fill(ab + mc * lda_w, ab + mc_pad * lda_w, 0u);
+    const std::uint32_t* ab = aw ? aw + i0 * ldw : conv;
+    if (!aw) {
+      for (std::int64_t r = 0; r < mc; ++r) convert_row(a + (i0 + r) * lda, k, conv + r * lda_w);
+      // Rows of the last partial register tile past m: zeros (read, never stored).
+      const std::int64_t mc_pad = (mc + MR - 1) / MR * MR;
+      std::fill(conv + mc * lda_w, conv + mc_pad * lda_w, 0u);
+    }
     for (std::int64_t j0 = 0; j0 < n; j0 += kBf16Nc) {
       const std::int64_t nc = std::min(kBf16Nc, n - j0);
       for (std::int64_t k0 = 0; k0 < k; k0 += kBf16Kc) {
         const std::int64_t kp = (std::min(kBf16Kc, k - k0) + 1) / 2;
-        const std::uint32_t* block = bp + packed_bf16_offset(k, j0, nc, k0, NR);
-        for (std::int64_t jr = 0; jr < nc; jr += NR) {
-          const int nr_eff = int(std::min<std::int64_t>(NR, nc - jr));
-          for (std::int64_t ir = 0; ir < mc; ir += MR)
-            micro_kernel<MR, NV>(kp, ab + ir * lda_w + k0 / 2, lda_w, block + jr * kp,
-                                 c + (i0 + ir) * ldc + j0 + jr, ldc, int(std::min<std::int64_t>(MR, mc - ir)),
-                                 nr_eff, k0 > 0);
+        const std::uint32_t* block = bp + packed_bf16_offset(k, j0, nc, k0);
+        for (std::int64_t jr = 0, w = 0; jr < nc; jr += w) {
+          w = bf16_panel_width(nc, jr);
+          const int nr_eff = int(std::min<std::int64_t>(w, nc - jr));
+          for (std::int64_t ir = 0; ir < mc; ir += MR) {
+            const std::uint32_t* at = ab + ir * lda_w + k0 / 2;
+            float* ct = c + (i0 + ir) * ldc + j0 + jr;
+            const int mr_eff = int(std::min<std::int64_t>(MR, mc - ir));
+            if (w == 32)
+              micro_kernel<MR, 2>(kp, at, lda_w, block + jr * kp, ct, ldc, mr_eff, nr_eff, k0 > 0);
+            else
+              micro_kernel<MR, 1>(kp, at, lda_w, block + jr * kp, ct, ldc, mr_eff, nr_eff, k0 > 0);
+          }
         }
       }
     }
@@ -134,13 +144,15 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
 }  // namespace
 
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
-                      std::int64_t n, float* c, std::int64_t ldc) {
+                      std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw) {
   if (m == 0 || n == 0) return;
-  if (bf16_nr(n) == 16)
-    gemm_rows<24, 1>(a, lda, m, k, bp, n, c, ldc);
+  if (n <= 16)
+    gemm_rows<24>(a, lda, m, k, bp, n, c, ldc, aw, ldw);
   else
-    gemm_rows<12, 2>(a, lda, m, k, bp, n, c, ldc);
+    gemm_rows<12>(a, lda, m, k, bp, n, c, ldc, aw, ldw);
 }
+
+void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out) { convert_row(x, count, out); }
 
 void bf16_convert_avx512(const float* x, std::int64_t count, std::uint16_t* out) {
   for (std::int64_t i = 0; i < count; i += 32) {

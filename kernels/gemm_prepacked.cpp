@@ -61,6 +61,72 @@ PrepackedB prepack_b(const Tensor& B, Precision precision) {
   return p;
 }
 
+namespace {
+// f(i0, rows) over fixed row blocks, spread over the OpenMP threads.
+template <class F>
+void for_row_blocks(std::int64_t m, std::int64_t n, std::int64_t k, F&& f) {
+  const std::int64_t blocks = (m + kRowBlock - 1) / kRowBlock;
+  const double flops = 2.0 * double(m) * double(n) * double(k);
+#pragma omp parallel for schedule(static) if (blocks > 1 && flops >= kParallelMinFlops)
+  for (std::int64_t blk = 0; blk < blocks; ++blk) f(blk * kRowBlock, std::min(kRowBlock, m - blk * kRowBlock));
+}
+}  // namespace
+
+void bf16_pairs(const Tensor& A, std::uint32_t* dst, std::int64_t ld) {
+  check_cpu_f32(A, "bf16_pairs: A");
+  const std::int64_t k = A.cols(), words = (k + 1) / 2;
+  GATCORE_CHECK(ld >= words, "bf16_pairs: ld ", ld, " is below the ", words, " words of a row");
+  const bool hw = bf16_supported();
+  for_row_blocks(A.rows(), 8, k, [&](std::int64_t i0, std::int64_t rows) {
+    for (std::int64_t i = i0; i < i0 + rows; ++i) {
+      const float* a = A.row(i);
+      std::uint32_t* d = dst + i * ld;
+#if defined(__x86_64__) && defined(__GNUC__)
+      if (hw) {
+        detail::bf16_pairs_avx512(a, k, d);
+        continue;
+      }
+#endif
+      for (std::int64_t p = 0; p < words; ++p)
+        d[p] = bf16_bits(a[2 * p]) | (2 * p + 1 < k ? std::uint32_t(bf16_bits(a[2 * p + 1])) << 16 : 0u);
+    }
+  });
+}
+
+void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C) {
+  check_cpu_f32(C, "gemm_prepacked: C");
+  const std::int64_t m = A.rows, k = A.cols, n = B.n;
+  GATCORE_CHECK(B.precision == Precision::bf16, "gemm_prepacked: bf16 rows need a B packed in bf16");
+  GATCORE_CHECK(k == B.k, "gemm_prepacked: A [", m, ", ", k, "] has ", k, " columns, the packed B has ", B.k, " rows");
+  GATCORE_CHECK(C.rows() == m && C.cols() == n, "gemm_prepacked: C: expected shape [", m, ", ", n, "], got ",
+                C.shape_str());
+  GATCORE_CHECK(A.words && A.ld >= (k + 1) / 2, "gemm_prepacked: bf16 rows: null, or ld ", A.ld, " below ",
+                (k + 1) / 2, " words");
+  if (m == 0 || n == 0) return;
+  if (k == 0) {
+    for (std::int64_t r = 0; r < m; ++r) std::fill(C.row(r), C.row(r) + n, 0.0f);
+    return;
+  }
+  float* c = C.data();
+  const std::int64_t ldc = C.ld();
+  const bool hw = !B.bf16.empty() && bf16_supported();
+  for_row_blocks(m, n, k, [&](std::int64_t i0, std::int64_t rows) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (hw) {
+      detail::gemm_bf16_avx512(nullptr, 0, rows, k, B.bf16.data(), n, c + i0 * ldc, ldc, A.words + i0 * A.ld, A.ld);
+      return;
+    }
+#endif
+    std::vector<float> a(static_cast<std::size_t>(k));  // the portable path: values back to floats
+    for (std::int64_t i = i0; i < i0 + rows; ++i) {
+      const std::uint32_t* w = A.words + i * A.ld;
+      for (std::int64_t kk = 0; kk < k; ++kk)
+        a[std::size_t(kk)] = bf16_to_float(std::uint16_t(kk % 2 ? w[kk / 2] >> 16 : w[kk / 2] & 0xFFFFu));
+      detail::gemm_bf16_portable(a.data(), k, 1, k, B.plain.data(), B.plain.ld(), n, c + i * ldc, ldc);
+    }
+  });
+}
+
 void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C) {
   check_cpu_f32(A, "gemm_prepacked: A");
   check_cpu_f32(C, "gemm_prepacked: C");
@@ -87,11 +153,7 @@ void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C) {
     gemm(A, false, B.plain, false, C, 1.0f, 0.0f);
     return;
   }
-  const std::int64_t blocks = (m + kRowBlock - 1) / kRowBlock;
-  const double flops = 2.0 * double(m) * double(n) * double(k);
-#pragma omp parallel for schedule(static) if (blocks > 1 && flops >= kParallelMinFlops)
-  for (std::int64_t blk = 0; blk < blocks; ++blk) {
-    const std::int64_t i0 = blk * kRowBlock, rows = std::min(kRowBlock, m - i0);
+  for_row_blocks(m, n, k, [&](std::int64_t i0, std::int64_t rows) {
     switch (path) {
 #if defined(__x86_64__) && defined(__GNUC__)
       case Path::f32: {
@@ -106,7 +168,7 @@ void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C) {
         detail::gemm_bf16_portable(a + i0 * lda, lda, rows, k, B.plain.data(), B.plain.ld(), n, c + i0 * ldc, ldc);
         break;
     }
-  }
+  });
 }
 
 }  // namespace cpu

@@ -54,4 +54,22 @@ PrepackedB prepack_b(const Tensor& B, Precision precision);
 // C [m, n] = A [m, k] times the packed B. C must not overlap A.
 void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C);
 
+// An A operand already rounded to bf16, as pair words: row i's columns
+// (2p, 2p + 1) in words[i * ld + p] (low half first; an odd column count's
+// last high half zero). For operands a caller reuses across products: the
+// deploy path keeps such a copy of each DenseNet buffer, converting each
+// block's new columns once, where every later block's product would
+// otherwise convert (and read in fp32) the whole prefix again.
+struct Bf16Rows {
+  const std::uint32_t* words = nullptr;
+  std::int64_t rows = 0, cols = 0, ld = 0;  // ld in words
+};
+// A's rows as bf16 pair words into dst (row i at dst + i * ld). Bitwise the
+// rounding gemm_prepacked applies to a float A.
+void bf16_pairs(const Tensor& A, std::uint32_t* dst, std::int64_t ld);
+// C = A B for a bf16 packed B: bitwise gemm_prepacked on the float A these
+// words came from. The storage must hold (A.rows rounded up to 24) rows of
+// ld words (the kernel's last register tile reads rows it does not store).
+void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C);
+
 }  // namespace gatcore::cpu

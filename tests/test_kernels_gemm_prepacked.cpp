@@ -150,6 +150,36 @@ TEST_CASE("gemm_prepacked bf16: portable and AVX512_BF16 products against the do
     }
 }
 
+TEST_CASE("gemm_prepacked bf16: pre-converted bf16 rows give the float A's product bitwise", "[gemm_prepacked]") {
+  Rng rng(33);
+  for (const Mkn& s : kShapes)
+    for (auto level : simd_levels()) {
+      Simd simd(level);
+      const Tensor A = random(rng, s.m, s.k, true), B = random(rng, s.k, s.n, false);
+      const cpu::PrepackedB P = cpu::prepack_b(B, Precision::bf16);
+      const std::int64_t ld = (s.k + 1) / 2 + 3;  // a row stride wider than the row
+      std::vector<std::uint32_t> words(std::size_t((s.m + 23) / 24 * 24 * ld), 0xFFFFFFFFu);  // padding rows: NaN pairs
+      cpu::bf16_pairs(A, words.data(), ld);
+      for (std::int64_t i = 0; i < s.m; ++i)
+        for (std::int64_t kk = 0; kk < s.k; ++kk) {
+          const std::uint32_t w = words[std::size_t(i * ld + kk / 2)];
+          REQUIRE(std::uint16_t(kk % 2 ? w >> 16 : w & 0xFFFFu) == cpu::bf16_bits(A.at(i, kk)));
+        }
+      if (s.k % 2) {
+        for (std::int64_t i = 0; i < s.m; ++i) REQUIRE(words[std::size_t(i * ld + s.k / 2)] >> 16 == 0u);
+      }
+      Tensor want = Tensor::empty(s.m, s.n), got = Tensor::empty(s.m, s.n);
+      cpu::gemm_prepacked(A, P, want);
+      cpu::gemm_prepacked(cpu::Bf16Rows{words.data(), s.m, s.k, ld}, P, got);
+      INFO("m " << s.m << " k " << s.k << " n " << s.n << " level " << cpu::simd_level_name(level));
+      REQUIRE(same_bits(got, want));
+    }
+  const cpu::PrepackedB F = cpu::prepack_b(Tensor::full(4, 3, 1.0f), Precision::fp32);
+  std::vector<std::uint32_t> w(48, 0);
+  CHECK_THROWS_WITH(cpu::gemm_prepacked(cpu::Bf16Rows{w.data(), 2, 4, 2}, F, Tensor::empty(2, 3)),
+                    Catch::Contains("need a B packed in bf16"));
+}
+
 TEST_CASE("gemm_prepacked bf16 is not fp32: a product that bf16 rounding changes", "[gemm_prepacked]") {
   // 1 + 2^-10 is not a bf16 value (8-bit mantissa): the bf16 product of
   // [1 + 2^-10] and [1] is 1, the fp32 product is not. Guards against a bf16
@@ -165,7 +195,7 @@ TEST_CASE("gemm_prepacked bf16 is not fp32: a product that bf16 rounding changes
   }
 }
 
-TEST_CASE("gemm_prepacked: shape errors name the operands; k = 0 gives zeros", "[gemm_prepacked]") {
+TEST_CASE("gemm_prepacked: shape errors name the operands, k = 0 gives zeros", "[gemm_prepacked]") {
   const cpu::PrepackedB P = cpu::prepack_b(Tensor::full(4, 3, 1.0f), Precision::fp32);
   Tensor C = Tensor::empty(2, 3);
   CHECK_THROWS_WITH(cpu::gemm_prepacked(Tensor::empty(2, 5), P, C), Catch::Contains("packed B has 4 rows"));

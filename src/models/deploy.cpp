@@ -235,12 +235,23 @@ Precision deploy_precision(const DeployModel& m) { return m.precision; }
 Device deploy_device(const DeployModel& m) { return m.device; }
 std::int64_t deploy_parameter_count(const DeployModel& m) { return m.params; }
 
+namespace {
+// CPU bf16: a bf16 copy of a DenseNet buffer, kept in step as its columns are
+// written, so each product reads its prefix as bf16 (half the bytes) instead
+// of every later block re-converting the whole prefix.
+struct Shadow {
+  std::vector<std::uint32_t, cpu::Aligned64<std::uint32_t>> words;
+  std::int64_t ld = 0;  // words per row
+};
+}  // namespace
+
 struct DeployPlan::Buffers {
   Tensor x;  // the model input on the device (CPU: x_host_ itself)
   std::vector<Tensor> t_lin, t_act, h_lin, h_act;
   std::vector<Tensor> mod;
   Tensor z, both, tsh, el, er, alpha;  // GAT block scratch, reused by every block
   Tensor zs;  // CPU: [z | self] from the one product of a GAT block
+  std::vector<Shadow> mod_bf16;  // CPU bf16: one per B.mod (empty when not used)
   std::vector<Tensor> o_z, o_y, o_act, o_el, o_er, o_alpha;  // origat, per layer
 };
 
@@ -273,6 +284,17 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
     for (std::size_t m = 0; m < M.modules.size(); ++m)
       B.mod.push_back(be.empty(n_, M.module_in[m] + std::int64_t(M.modules[m].size()) * M.modules[m].front().width()));
     const GatStep& g = M.modules.front().front();
+    // Shadows need every column range they hold to start at an even column
+    // (pairs): the module inputs and the block widths even (the paper's 32 and 72).
+    bool even = g.width() % 2 == 0;
+    for (std::int64_t w : M.module_in) even = even && w % 2 == 0;
+    if (M.device == Device::cpu && M.precision == Precision::bf16 && even)
+      for (const Tensor& t : B.mod) {
+        Shadow s;
+        s.ld = (t.cols() / 2 + 15) / 16 * 16;  // 64-byte aligned rows
+        s.words.assign(std::size_t((n_ + 23) / 24 * 24 * s.ld), 0u);  // rows to a multiple of 24 (gemm_prepacked)
+        B.mod_bf16.push_back(std::move(s));
+      }
     if (M.device == Device::cpu) {
       B.zs = be.empty(n_, g.width());
       B.z = B.zs.cols_slice(0, g.kf());
@@ -299,12 +321,25 @@ DeployPlan::~DeployPlan() {
 namespace {
 
 // nn::GatBlock::forward (eval) of `x` into `out`.
+// Columns [c0, c1) of a shadowed buffer, as the bf16 A operand of a product.
+cpu::Bf16Rows shadow_rows(const Shadow& s, std::int64_t n, std::int64_t c0, std::int64_t c1) {
+  return {s.words.data() + c0 / 2, n, c1 - c0, s.ld};
+}
+// After columns [c0, c1) of `buf` were written: the same columns of its shadow (if any).
+void shadow_update(Shadow* s, const Tensor& buf, std::int64_t c0, std::int64_t c1) {
+  if (s) cpu::bf16_pairs(buf.cols_slice(c0, c1), s->words.data() + c0 / 2, s->ld);
+}
+
 // (CPU: z is the first kf columns of zs, whose last self_width columns get the self stream's product.)
+// xw: x as bf16 rows (CPU bf16 with shadows), or null.
 void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x, const Tensor& out, Tensor& z,
-               const Tensor& zs, Tensor& both, Tensor& tsh, Tensor& el, Tensor& er, Tensor& alpha) {
+               const Tensor& zs, Tensor& both, Tensor& tsh, Tensor& el, Tensor& er, Tensor& alpha,
+               const cpu::Bf16Rows* xw = nullptr) {
   const std::int64_t kf = s.kf();
   const bool cpu = be.device() == Device::cpu;
-  if (cpu)
+  if (xw)
+    cpu::gemm_prepacked(*xw, s.Wp, zs);
+  else if (cpu)
     cpu::gemm_prepacked(x, s.Wp, zs);
   else
     be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
@@ -330,8 +365,11 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
 }
 
 // nn::DenseLayer::forward (eval, folded) / Linear::forward of `x`.
-void dense_step(Backend& be, const DenseStep& s, const Tensor& x, const Tensor& lin, const Tensor& out) {
-  if (be.device() == Device::cpu)
+void dense_step(Backend& be, const DenseStep& s, const Tensor& x, const Tensor& lin, const Tensor& out,
+                const cpu::Bf16Rows* xw = nullptr) {
+  if (xw)
+    cpu::gemm_prepacked(*xw, s.Wp, lin);
+  else if (be.device() == Device::cpu)
     cpu::gemm_prepacked(x, s.Wp, lin);
   else
     be.gemm(x, false, s.W, false, lin, 1.0f, 0.0f);
@@ -385,23 +423,34 @@ const Tensor& DeployPlan::run() {
       dense_step(be, M.transform[k], y, B.t_lin[k], dst);
       y = dst;
     }
+    const bool shadows = !B.mod_bf16.empty();
+    auto shadow = [&](std::size_t m) { return shadows ? &B.mod_bf16[m] : nullptr; };
+    shadow_update(shadow(0), B.mod[0], 0, M.module_in[0]);
+    cpu::Bf16Rows yw;  // y as bf16 rows, when shadowed
     for (std::size_t m = 0; m < M.modules.size(); ++m) {
       const Tensor& buf = B.mod[m];
       const std::int64_t bw = M.modules[m].front().width();
       std::int64_t c0 = M.module_in[m], prev = 0;
       for (const GatStep& s : M.modules[m]) {
-        const Tensor input = M.dense ? buf.cols_slice(0, c0) : buf.cols_slice(prev, c0);
-        gat_block(be, g, s, input, buf.cols_slice(c0, c0 + bw), B.z, B.zs, B.both, B.tsh, B.el, B.er, B.alpha);
+        const std::int64_t lo = M.dense ? 0 : prev;
+        const cpu::Bf16Rows xw = shadows ? shadow_rows(B.mod_bf16[m], n_, lo, c0) : cpu::Bf16Rows{};
+        gat_block(be, g, s, buf.cols_slice(lo, c0), buf.cols_slice(c0, c0 + bw), B.z, B.zs, B.both, B.tsh, B.el,
+                  B.er, B.alpha, shadows ? &xw : nullptr);
+        shadow_update(shadow(m), buf, c0, c0 + bw);
         prev = c0;
         c0 += bw;
       }
-      y = M.dense ? buf : buf.cols_slice(prev, c0);
-      if (m + 1 < M.modules.size())
+      const std::int64_t lo = M.dense ? 0 : prev;
+      y = buf.cols_slice(lo, c0);
+      if (shadows) yw = shadow_rows(B.mod_bf16[m], n_, lo, c0);
+      if (m + 1 < M.modules.size()) {
         gat_block(be, g, M.transitions[m], y, B.mod[m + 1].cols_slice(0, M.module_in[m + 1]), B.z, B.zs, B.both,
-                  B.tsh, B.el, B.er, B.alpha);
+                  B.tsh, B.el, B.er, B.alpha, shadows ? &yw : nullptr);
+        shadow_update(shadow(m + 1), B.mod[m + 1], 0, M.module_in[m + 1]);
+      }
     }
     for (std::size_t k = 0; k < M.head.size(); ++k) {
-      dense_step(be, M.head[k], y, B.h_lin[k], B.h_act[k]);
+      dense_step(be, M.head[k], y, B.h_lin[k], B.h_act[k], shadows && k == 0 ? &yw : nullptr);
       y = M.head[k].act != Activation::identity ? B.h_act[k] : B.h_lin[k];
     }
     out = y;
