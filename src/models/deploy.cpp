@@ -11,6 +11,7 @@
 #include "gatcore/backend.hpp"
 #include "gatcore/vulkan.hpp"
 #include "kernels/batchnorm.hpp"
+#include "kernels/gat_epilogue_bf16.hpp"
 #include "kernels/gemm_prepacked.hpp"
 
 namespace gatcore::models {
@@ -331,10 +332,13 @@ void shadow_update(Shadow* s, const Tensor& buf, std::int64_t c0, std::int64_t c
 }
 
 // (CPU: z is the first kf columns of zs, whose last self_width columns get the self stream's product.)
-// xw: x as bf16 rows (CPU bf16 with shadows), or null.
+// With shadows (CPU bf16): xw is x as bf16 rows, and the block's output goes
+// only to `out_words` (its columns of the shadow, `out_ld` words per row),
+// through gat_epilogue_bf16; `out`'s floats are then not written (nothing
+// reads them: every later product reads the shadow).
 void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x, const Tensor& out, Tensor& z,
                const Tensor& zs, Tensor& both, Tensor& tsh, Tensor& el, Tensor& er, Tensor& alpha,
-               const cpu::Bf16Rows* xw = nullptr) {
+               const cpu::Bf16Rows* xw = nullptr, std::uint32_t* out_words = nullptr, std::int64_t out_ld = 0) {
   const std::int64_t kf = s.kf();
   const bool cpu = be.device() == Device::cpu;
   if (xw)
@@ -351,7 +355,12 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
       be.copy(zs.cols_slice(kf, kf + s.self_width), self);
     else
       be.gemm(x, false, s.self_W, false, self, 1.0f, 0.0f);
-    be.add_row_bias(s.self_b, self);
+    if (!out_words) be.add_row_bias(s.self_b, self);
+  }
+  if (out_words) {
+    cpu::gat_epilogue_bf16(both, kf, s.self_width > 0 ? s.self_b : Tensor{}, s.bn ? s.bn_mean : Tensor{},
+                           s.bn_scale, s.bn_shift, out_words, out_ld);
+    return;
   }
   if (!s.bn) {
     be.activation_forward(Activation::tanhshrink, both, out, 0.f);
@@ -435,8 +444,8 @@ const Tensor& DeployPlan::run() {
         const std::int64_t lo = M.dense ? 0 : prev;
         const cpu::Bf16Rows xw = shadows ? shadow_rows(B.mod_bf16[m], n_, lo, c0) : cpu::Bf16Rows{};
         gat_block(be, g, s, buf.cols_slice(lo, c0), buf.cols_slice(c0, c0 + bw), B.z, B.zs, B.both, B.tsh, B.el,
-                  B.er, B.alpha, shadows ? &xw : nullptr);
-        shadow_update(shadow(m), buf, c0, c0 + bw);
+                  B.er, B.alpha, shadows ? &xw : nullptr,
+                  shadows ? B.mod_bf16[m].words.data() + c0 / 2 : nullptr, shadows ? B.mod_bf16[m].ld : 0);
         prev = c0;
         c0 += bw;
       }
@@ -445,8 +454,8 @@ const Tensor& DeployPlan::run() {
       if (shadows) yw = shadow_rows(B.mod_bf16[m], n_, lo, c0);
       if (m + 1 < M.modules.size()) {
         gat_block(be, g, M.transitions[m], y, B.mod[m + 1].cols_slice(0, M.module_in[m + 1]), B.z, B.zs, B.both,
-                  B.tsh, B.el, B.er, B.alpha, shadows ? &yw : nullptr);
-        shadow_update(shadow(m + 1), B.mod[m + 1], 0, M.module_in[m + 1]);
+                  B.tsh, B.el, B.er, B.alpha, shadows ? &yw : nullptr,
+                  shadows ? B.mod_bf16[m + 1].words.data() : nullptr, shadows ? B.mod_bf16[m + 1].ld : 0);
       }
     }
     for (std::size_t k = 0; k < M.head.size(); ++k) {

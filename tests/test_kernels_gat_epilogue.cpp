@@ -1,0 +1,60 @@
+// gat_epilogue_bf16 (kernels/gat_epilogue_bf16.hpp) against the composition
+// it replaces on the bf16 deploy path: add_row_bias on the self columns,
+// activation_forward tanhshrink, batchnorm_affine_forward, bf16_pairs.
+// Bitwise, on odd widths, with and without the affine map and the self
+// stream, strided input, 1 and 2 threads. AVX512_BF16 CPUs only.
+#include <catch2/catch.hpp>
+
+#include <cstring>
+
+#include "gatcore/precision.hpp"
+#include "kernels/batchnorm.hpp"
+#include "kernels/elementwise.hpp"
+#include "kernels/gat_epilogue_bf16.hpp"
+#include "kernels/gemm_prepacked.hpp"
+#include "reference/nn_reference.hpp"
+
+using namespace gatcore;
+using namespace gatcore::testutil;
+
+TEST_CASE("gat_epilogue_bf16 equals add_row_bias + tanhshrink + batchnorm_affine_forward + bf16_pairs bitwise",
+          "[gat_epilogue]") {
+  if (!bf16_supported()) {
+    WARN("SKIPPED: this CPU has no AVX512_BF16 (the kernel's only users run there)");
+    CHECK_THROWS_WITH(cpu::gat_epilogue_bf16(Tensor::zeros(2, 4), 4, Tensor{}, Tensor{}, Tensor{}, Tensor{}, nullptr, 2),
+                      Catch::Contains("AVX512_BF16"));
+    return;
+  }
+  Rng rng(41);
+  struct Case {
+    std::int64_t n, W, self0;
+  };
+  for (const Case& k : {Case{300, 72, 64}, Case{37, 33, 30}, Case{5, 8, 0}, Case{9, 1, 1}, Case{130, 40, 40},
+                        Case{64, 64, 64}, Case{11, 47, 17}})
+    for (bool affine : {true, false})
+      for (int threads : {1, 2}) {
+        Threads t(threads);
+        INFO("n " << k.n << " W " << k.W << " self from " << k.self0 << " affine " << affine << " threads " << threads);
+        const Tensor both = random(rng, k.n, k.W, true, -3.f, 3.f);
+        const Tensor bias = k.W > k.self0 ? random(rng, 1, k.W - k.self0, false) : Tensor{};
+        Tensor mean, scale, shift;
+        if (affine) {
+          mean = random(rng, 1, k.W, false, -0.5f, 0.5f);
+          scale = random(rng, 1, k.W, false, 0.5f, 2.f);
+          shift = random(rng, 1, k.W, false);
+        }
+        // The composition.
+        Tensor x = both.clone(), y = Tensor::empty(k.n, k.W), z = Tensor::empty(k.n, k.W);
+        if (bias.defined()) cpu::add_row_bias(bias, x.cols_slice(k.self0, k.W));
+        cpu::activation_forward(Activation::tanhshrink, x, y, 0.f);
+        if (affine) cpu::batchnorm_affine_forward(y, mean, scale, shift, z);
+        const std::int64_t ld = (k.W + 1) / 2 + 2;
+        std::vector<std::uint32_t> want(std::size_t(k.n * ld), 0xABCDu), got(want.size(), 0xABCDu);
+        cpu::bf16_pairs(affine ? z : y, want.data(), ld);
+        cpu::gat_epilogue_bf16(both, k.self0, bias, mean, scale, shift, got.data(), ld);
+        std::size_t bad = 0;
+        for (std::int64_t r = 0; r < k.n; ++r)
+          for (std::int64_t w = 0; w < ld; ++w) bad += want[std::size_t(r * ld + w)] != got[std::size_t(r * ld + w)];
+        CHECK(bad == 0);  // the padding words past the row untouched too
+      }
+}
