@@ -1,14 +1,16 @@
 #pragma once
 // The end of a GAT block on the bf16 deploy path (models/deploy.cpp), in one
-// pass over the block's [attention | self stream] output `both` [n, W]:
-//   y = affine(tanhshrink(both + [0 | self_b]))
+// pass over the block's attention output `att` [n, kf] and self stream
+// `self` [n, S] (S = 0: undefined), W = kf + S columns:
+//   y = affine(tanhshrink([att | self + self_b]))
 // affine: BatchNorm's prepared eval map ((x - mean) * scale + shift, as
 // batchnorm_affine_forward; undefined mean = none), written only as bf16
 // pair words (row i at dst + i * ld, ceil(W/2) words: bf16_pairs' layout),
 // the form every later product of the block's DenseNet buffer reads. The
-// composition (add_row_bias on the self columns, activation_forward
+// composition (copying both streams into one [n, W] tensor, add_row_bias on
+// the self columns, activation_forward
 // tanhshrink, batchnorm_affine_forward, bf16_pairs) reads and writes the
-// block's output four times; on a 10k-vertex frame those passes were a
+// block's output five times; on a 10k-vertex frame those passes were a
 // quarter of the bf16 frame's time. Same arithmetic as the composition
 // (tested bitwise). AVX512_BF16 CPUs only (bf16_supported(); the deploy
 // path uses bf16 nowhere else); throws otherwise.
@@ -18,7 +20,7 @@
 
 namespace gatcore::cpu {
 
-void gat_epilogue_bf16(const Tensor& both, std::int64_t self_col0, const Tensor& self_b, const Tensor& mean,
+void gat_epilogue_bf16(const Tensor& att, const Tensor& self, const Tensor& self_b, const Tensor& mean,
                        const Tensor& scale, const Tensor& shift, std::uint32_t* dst, std::int64_t ld);
 
 }  // namespace gatcore::cpu

@@ -1,5 +1,6 @@
 // gat_epilogue_bf16 (kernels/gat_epilogue_bf16.hpp) against the composition
-// it replaces on the bf16 deploy path: add_row_bias on the self columns,
+// it replaces on the bf16 deploy path: the attention and self streams copied
+// side by side, add_row_bias on the self columns,
 // activation_forward tanhshrink, batchnorm_affine_forward, bf16_pairs.
 // Bitwise, on odd widths, with and without the affine map and the self
 // stream, strided input, 1 and 2 threads. AVX512_BF16 CPUs only.
@@ -21,7 +22,7 @@ TEST_CASE("gat_epilogue_bf16 equals add_row_bias + tanhshrink + batchnorm_affine
           "[gat_epilogue]") {
   if (!bf16_supported()) {
     WARN("SKIPPED: this CPU has no AVX512_BF16 (the kernel's only users run there)");
-    CHECK_THROWS_WITH(cpu::gat_epilogue_bf16(Tensor::zeros(2, 4), 4, Tensor{}, Tensor{}, Tensor{}, Tensor{}, nullptr, 2),
+    CHECK_THROWS_WITH(cpu::gat_epilogue_bf16(Tensor::zeros(2, 4), Tensor{}, Tensor{}, Tensor{}, Tensor{}, Tensor{}, nullptr, 2),
                       Catch::Contains("AVX512_BF16"));
     return;
   }
@@ -51,7 +52,8 @@ TEST_CASE("gat_epilogue_bf16 equals add_row_bias + tanhshrink + batchnorm_affine
         const std::int64_t ld = (k.W + 1) / 2 + 2;
         std::vector<std::uint32_t> want(std::size_t(k.n * ld), 0xABCDu), got(want.size(), 0xABCDu);
         cpu::bf16_pairs(affine ? z : y, want.data(), ld);
-        cpu::gat_epilogue_bf16(both, k.self0, bias, mean, scale, shift, got.data(), ld);
+        cpu::gat_epilogue_bf16(both.cols_slice(0, k.self0), k.W > k.self0 ? both.cols_slice(k.self0, k.W) : Tensor{},
+                               bias, mean, scale, shift, got.data(), ld);
         std::size_t bad = 0;
         for (std::int64_t r = 0; r < k.n; ++r)
           for (std::int64_t w = 0; w < ld; ++w) bad += want[std::size_t(r * ld + w)] != got[std::size_t(r * ld + w)];

@@ -333,6 +333,31 @@ TEST_CASE("runtime::Deformer in bf16: offsets within bf16's rounding of fp32's",
                     Contains("'fp16' is not a precision"));
 }
 
+// Not run by ctest: the bf16 offset error of a given (trained) checkpoint on
+// a procedural humanoid, for bench/RESULTS.md:
+//   GATCORE_BF16_CHECKPOINT=model.gcm test_runtime "[.bf16_accuracy]"
+TEST_CASE("bf16 offset error of a checkpoint", "[.bf16_accuracy]") {
+  const char* path = std::getenv("GATCORE_BF16_CHECKPOINT");
+  REQUIRE(path);
+  REQUIRE(bf16_supported());
+  for (std::uint32_t seed : {3u, 5u}) {
+    ProceduralOptions o;
+    o.seed = seed;
+    o.ring_segments = 16;
+    o.rings_per_bone = 6;
+    const Character ch = procedural_character(o);
+    runtime::Deformer f32 = runtime::Deformer::load(path);
+    runtime::Deformer b16 = runtime::Deformer::load(path, runtime::DeviceChoice::cpu, Precision::bf16);
+    f32.bind(ch.mesh, ch.skeleton);
+    b16.bind(ch.mesh, ch.skeleton);
+    const OffsetError e = offset_error(f32, b16, ch);
+    WARN(path << " (" << f32.model_name() << ", " << f32.parameter_count() << " parameters), humanoid seed " << seed
+              << " (" << f32.num_vertices() << " vertices, " << f32.mapped_joints()
+              << " joints mapped), 3 poses: mean |offset error| / mean |correction| = " << e.mean_rel
+              << ", max / max = " << e.max_rel);
+  }
+}
+
 TEST_CASE("runtime::Deformer::deform allocates nothing after bind", "[runtime]") {
   const Character ch = humanoid(4);
   const std::vector<std::string> bones = bone_names(ch.skeleton);

@@ -349,18 +349,19 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
     be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
   be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
   be.gat_fused_additive_forward(g, z, el, er, s.slope, both.cols_slice(0, kf), alpha);
+  if (out_words) {  // reads the self stream's product where the GEMM left it
+    cpu::gat_epilogue_bf16(both.cols_slice(0, kf), s.self_width > 0 ? zs.cols_slice(kf, kf + s.self_width) : Tensor{},
+                           s.self_width > 0 ? s.self_b : Tensor{}, s.bn ? s.bn_mean : Tensor{}, s.bn_scale,
+                           s.bn_shift, out_words, out_ld);
+    return;
+  }
   if (s.self_width > 0) {
     const Tensor self = both.cols_slice(kf, kf + s.self_width);
     if (cpu)
       be.copy(zs.cols_slice(kf, kf + s.self_width), self);
     else
       be.gemm(x, false, s.self_W, false, self, 1.0f, 0.0f);
-    if (!out_words) be.add_row_bias(s.self_b, self);
-  }
-  if (out_words) {
-    cpu::gat_epilogue_bf16(both, kf, s.self_width > 0 ? s.self_b : Tensor{}, s.bn ? s.bn_mean : Tensor{},
-                           s.bn_scale, s.bn_shift, out_words, out_ld);
-    return;
+    be.add_row_bias(s.self_b, self);
   }
   if (!s.bn) {
     be.activation_forward(Activation::tanhshrink, both, out, 0.f);
