@@ -6,8 +6,6 @@
 // (here a BVH retargeted onto the character stands in for it).
 //
 //   runtime_deform_clip MODEL.gcm CHARACTER.glb MOTION.bvh [-o OUT.pc2] [--threads T] [--device cpu|auto]
-//                       [--precision fp32|bf16]
-// (bf16: the model's products in bfloat16 on CPUs with AVX512_BF16; gatcore/precision.hpp.)
 #include <omp.h>
 
 #include <algorithm>
@@ -28,13 +26,12 @@ using namespace gatcore;
 using namespace gatcore::character;
 
 int main(int argc, char** argv) {
-  std::string model, character, motion, out, precision = "fp32";
+  std::string model, character, motion, out;
   runtime::DeviceChoice device = runtime::DeviceChoice::cpu;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-o" && i + 1 < argc) out = argv[++i];
     else if (a == "--threads" && i + 1 < argc) omp_set_num_threads(std::max(1, std::atoi(argv[++i])));
-    else if (a == "--precision" && i + 1 < argc) precision = argv[++i];
     else if (a == "--device" && i + 1 < argc) device = std::strcmp(argv[++i], "auto") ? runtime::DeviceChoice::cpu : runtime::DeviceChoice::automatic;
     else if (model.empty()) model = a;
     else if (character.empty()) character = a;
@@ -46,18 +43,18 @@ int main(int argc, char** argv) {
   }
   if (motion.empty()) {
     std::fprintf(stderr, "usage: runtime_deform_clip MODEL.gcm CHARACTER.glb MOTION.bvh [-o OUT.pc2] [--threads T] "
-                         "[--device cpu|auto] [--precision fp32|bf16]\n");
+                         "[--device cpu|auto]\n");
     return 2;
   }
   try {
     // ---- load and bind: once per character ----
-    runtime::Deformer deformer = runtime::Deformer::load(model, device, parse_precision(precision, "--precision"));
+    runtime::Deformer deformer = runtime::Deformer::load(model, device);
     const Character ch = load_character(character);
     deformer.bind(ch.mesh, ch.skeleton);
-    std::printf("%s: %lld vertices, %d joints (%d matched to the model's bones); model %s, %lld parameters, %s\n",
+    std::printf("%s: %lld vertices, %d joints (%d matched to the model's bones); model %s, %lld parameters\n",
                 character.c_str(), static_cast<long long>(deformer.num_vertices()), deformer.num_joints(),
                 deformer.mapped_joints(), deformer.model_name().c_str(),
-                static_cast<long long>(deformer.parameter_count()), precision_name(deformer.precision()));
+                static_cast<long long>(deformer.parameter_count()));
     // The engine's animation, stood in for by a retargeted BVH.
     const Clip clip = retarget(load_bvh(motion), ch.skeleton, compute_normalisation(ch).bind_to_world);
 
