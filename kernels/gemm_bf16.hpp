@@ -42,13 +42,23 @@ namespace detail {
 // (B[k0 + 2p, j] low half, B[k0 + 2p + 1, j] high half) as bf16 (an odd k's
 // last pair has a zero high half): the operand VDPBF16PS multiplies pairwise
 // with a broadcast (A[i, 2p], A[i, 2p + 1]). Panels are 32 wide (two vectors
-// per row), the last one 16 wide when 16 columns are left: a GAT block's
-// 72 columns (64 + the 8-wide self stream) are 32 + 32 + 16, not 3 x 32.
-constexpr std::int64_t kBf16Kc = 384;  // 192 pairs: a 32-wide panel is 24 KiB, kept in L1
+// per row) while more than 80 columns are left, then one panel of the rest
+// (16 to 80): a GAT block's 72 columns (64 + the 8-wide self stream) are one
+// 80-wide panel, not 3 x 32.
+// k block: 384 pairs, all of k for DenseGATs' products (k <= 504). Measured
+// (one thread, [10000 x 392] x [392 x 72]): 3.7 ms at 768, 4.2 ms at 384,
+// 4.4 ms at 192: fewer passes over C beat keeping the B panel in L1 (the
+// panel streams from L2 with one load per 5-12 multiply-adds).
+constexpr std::int64_t kBf16Kc = 768;
 constexpr std::int64_t kBf16Nc = 512;
 inline std::int64_t bf16_ncpad(std::int64_t nc) { return (nc + 15) / 16 * 16; }
 // Width of the panel starting at column jr of a block of nc columns.
-inline int bf16_panel_width(std::int64_t nc, std::int64_t jr) { return bf16_ncpad(nc) - jr >= 32 ? 32 : 16; }
+inline int bf16_panel_width(std::int64_t nc, std::int64_t jr) {
+  const std::int64_t rest = bf16_ncpad(nc) - jr;
+  return rest <= 80 ? int(rest) : 32;
+}
+// Rows past a row block the kernel may read (its last register tile's, not stored).
+constexpr std::int64_t kPadRows = 24;
 std::int64_t packed_bf16_words(std::int64_t k, std::int64_t n);
 // Start of the block (column block j0 of width nc, k block k0); its panel at
 // column jr starts jr * kp words further.
@@ -64,8 +74,8 @@ bool cpu_has_avx512_bf16();
 // packed by pack_b_bf16, C [m, n] (ld ldc) overwritten. Serial (the caller
 // threads over row ranges). With `aw` non-null, A is read from there instead,
 // already as bf16 pair words (row i at aw + i * ldw, ceil(k/2) words; rows up
-// to m rounded up to 24 must be readable: a partial register tile reads them
-// into rows it does not store).
+// to m + kPadRows must be readable: a partial register tile reads them into
+// rows it does not store).
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
                       std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw = nullptr,
                       std::int64_t ldw = 0);

@@ -7,9 +7,11 @@
 // Blocking (as gemm_packed_avx512.cpp, halved operands): per call, rows in
 // blocks of kMc: the block's A rows are rounded to bf16 pairs once (all of
 // k, contiguous per row: kMc x k/2 words, in L2); B comes packed
-// (pack_b_bf16, at bind) in kBf16Kc x NR panels that stay in L1 while a
-// register tile of MR rows x NR columns (12 x 32; 12 x 16 for a 16-wide last
-// panel; 24 x 16 when n <= 16) runs down the block. Each C element sums its k blocks in order, a function
+// (pack_b_bf16, at bind) in kBf16Kc-deep panels (L1 / L2) while a register
+// tile of MR rows x the panel's columns runs down the block (12 x 32 for
+// wide products; one panel of all columns up to 80: 24 x 16, 8 x 48, 6 x 64,
+// 5 x 80, so a GAT block's 72 columns are one 5 x 80 tile with 5 multiply-adds
+// per broadcast of A). Each C element sums its k blocks in order, a function
 // of the shape only: results do not depend on the thread count.
 #include <algorithm>
 #include <cstdint>
@@ -56,27 +58,27 @@ void micro_kernel(std::int64_t kp, const std::uint32_t* __restrict a, std::int64
   __m512 acc[MR][NV];
 #pragma GCC unroll 32
   for (int r = 0; r < MR; ++r)
-#pragma GCC unroll 2
+#pragma GCC unroll 8
     for (int v = 0; v < NV; ++v) acc[r][v] = _mm512_setzero_ps();
   for (std::int64_t p = 0; p < kp; ++p) {
     __m512bh b[NV];
-#pragma GCC unroll 2
+#pragma GCC unroll 8
     for (int v = 0; v < NV; ++v) b[v] = (__m512bh)_mm512_load_si512(bp + p * NR + 16 * v);
 #pragma GCC unroll 32
     for (int r = 0; r < MR; ++r) {
       const __m512bh x = (__m512bh)_mm512_set1_epi32(int(a[r * lda + p]));
-#pragma GCC unroll 2
+#pragma GCC unroll 8
       for (int v = 0; v < NV; ++v) acc[r][v] = _mm512_dpbf16_ps(acc[r][v], x, b[v]);
     }
   }
   __mmask16 mask[NV];
-#pragma GCC unroll 2
+#pragma GCC unroll 8
   for (int v = 0; v < NV; ++v) mask[v] = lanes(nr_eff - 16 * v);
 #pragma GCC unroll 32
   for (int r = 0; r < MR; ++r) {
     if (r >= mr_eff) break;
     float* crow = c + r * ldc;
-#pragma GCC unroll 2
+#pragma GCC unroll 8
     for (int v = 0; v < NV; ++v) {
       __m512 x = acc[r][v];
       if (accumulate) x = _mm512_add_ps(x, _mm512_maskz_loadu_ps(mask[v], crow + 16 * v));
@@ -99,24 +101,37 @@ struct Buffer {
   }
 };
 
-// MR: rows of the register tile (12, or 24 when n <= 16 and every panel is 16 wide).
-template <int MR>
+// Register tile rows for a panel of NV vectors (16 columns each): about 24
+// accumulators, and NV accumulators per broadcast of A (the broadcasts, not
+// the multiply-adds, bound the narrow tiles: 24 x 16 ran at half the 12 x 32
+// tile's rate).
+constexpr int mr_for(int nv) { return nv == 1 ? 24 : nv == 2 ? 12 : nv == 3 ? 8 : nv == 4 ? 6 : 5; }
+
+// One panel (NV vectors wide) down a row block of mc rows.
+template <int NV>
+void panel_rows(std::int64_t mc, std::int64_t kp, const std::uint32_t* ab, std::int64_t lda_w,
+                const std::uint32_t* panel, float* c, std::int64_t ldc, int nr_eff, bool accumulate) {
+  constexpr int MR = mr_for(NV);
+  static_assert(kMc % MR == 0, "row blocks are whole register tiles");
+  for (std::int64_t ir = 0; ir < mc; ir += MR)
+    micro_kernel<MR, NV>(kp, ab + ir * lda_w, lda_w, panel, c + ir * ldc, ldc, int(std::min<std::int64_t>(MR, mc - ir)),
+                         nr_eff, accumulate);
+}
+
 void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
                std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw) {
-  static_assert(kMc % MR == 0, "row blocks are whole register tiles");
   const std::int64_t kp_all = (k + 1) / 2;
   // Converted row stride (words; rows 64-byte aligned), or the caller's pre-converted rows.
   const std::int64_t lda_w = aw ? ldw : (kp_all + 15) / 16 * 16;
   thread_local Buffer buf;
-  std::uint32_t* conv = aw ? nullptr : buf.get(kMc * lda_w);
+  std::uint32_t* conv = aw ? nullptr : buf.get((kMc + kPadRows) * lda_w);
   for (std::int64_t i0 = 0; i0 < m; i0 += kMc) {
     const std::int64_t mc = std::min(kMc, m - i0);
     const std::uint32_t* ab = aw ? aw + i0 * ldw : conv;
     if (!aw) {
       for (std::int64_t r = 0; r < mc; ++r) convert_row(a + (i0 + r) * lda, k, conv + r * lda_w);
       // Rows of the last partial register tile past m: zeros (read, never stored).
-      const std::int64_t mc_pad = (mc + MR - 1) / MR * MR;
-      std::fill(conv + mc * lda_w, conv + mc_pad * lda_w, 0u);
+      std::fill(conv + mc * lda_w, conv + (mc + kPadRows) * lda_w, 0u);
     }
     for (std::int64_t j0 = 0; j0 < n; j0 += kBf16Nc) {
       const std::int64_t nc = std::min(kBf16Nc, n - j0);
@@ -126,14 +141,15 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
         for (std::int64_t jr = 0, w = 0; jr < nc; jr += w) {
           w = bf16_panel_width(nc, jr);
           const int nr_eff = int(std::min<std::int64_t>(w, nc - jr));
-          for (std::int64_t ir = 0; ir < mc; ir += MR) {
-            const std::uint32_t* at = ab + ir * lda_w + k0 / 2;
-            float* ct = c + (i0 + ir) * ldc + j0 + jr;
-            const int mr_eff = int(std::min<std::int64_t>(MR, mc - ir));
-            if (w == 32)
-              micro_kernel<MR, 2>(kp, at, lda_w, block + jr * kp, ct, ldc, mr_eff, nr_eff, k0 > 0);
-            else
-              micro_kernel<MR, 1>(kp, at, lda_w, block + jr * kp, ct, ldc, mr_eff, nr_eff, k0 > 0);
+          const std::uint32_t* at = ab + k0 / 2;
+          float* ct = c + i0 * ldc + j0 + jr;
+          const std::uint32_t* panel = block + jr * kp;
+          switch (w / 16) {
+            case 1: panel_rows<1>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
+            case 2: panel_rows<2>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
+            case 3: panel_rows<3>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
+            case 4: panel_rows<4>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
+            default: panel_rows<5>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
           }
         }
       }
@@ -146,10 +162,7 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
                       std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw) {
   if (m == 0 || n == 0) return;
-  if (n <= 16)
-    gemm_rows<24>(a, lda, m, k, bp, n, c, ldc, aw, ldw);
-  else
-    gemm_rows<12>(a, lda, m, k, bp, n, c, ldc, aw, ldw);
+  gemm_rows(a, lda, m, k, bp, n, c, ldc, aw, ldw);
 }
 
 void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out) { convert_row(x, count, out); }

@@ -68,8 +68,8 @@ struct Bf16Rows {
 // rounding gemm_prepacked applies to a float A.
 void bf16_pairs(const Tensor& A, std::uint32_t* dst, std::int64_t ld);
 // C = A B for a bf16 packed B: bitwise gemm_prepacked on the float A these
-// words came from. The storage must hold (A.rows rounded up to 24) rows of
-// ld words (the kernel's last register tile reads rows it does not store).
+// words came from. The storage must hold A.rows + 24 rows of ld words (the
+// kernel's last register tile reads rows it does not store).
 void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C);
 
 }  // namespace gatcore::cpu

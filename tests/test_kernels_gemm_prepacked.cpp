@@ -3,8 +3,8 @@
 // reference of the bf16-rounded operands, through the portable emulation on
 // every CPU and through the AVX512_BF16 kernel where the CPU has it; the
 // rounding itself against VCVTNE2PS2BF16 bit for bit (on such CPUs). Odd
-// shapes (k odd: a half-empty last pair; n around the 16 / 32 panel widths
-// and the 512 column block; m around the 120-row blocks and 12 / 24-row
+// shapes (k odd: a half-empty last pair; n around the 16 .. 80 panel widths
+// and the 512 column block; m around the 120-row blocks and the 5 .. 24-row
 // register tiles), strided A, 1 vs 2 threads.
 #include <catch2/catch.hpp>
 
@@ -28,7 +28,8 @@ struct Mkn {
   std::int64_t m, k, n;
 };
 const Mkn kShapes[] = {{1, 1, 1},     {5, 3, 2},     {37, 17, 8},   {121, 193, 16}, {250, 385, 17},
-                       {130, 64, 64}, {241, 129, 3}, {13, 600, 33}, {300, 500, 520}, {49, 770, 72}};
+                       {130, 64, 64}, {241, 129, 3}, {13, 600, 33}, {300, 500, 520}, {49, 770, 72},
+                       {21, 50, 40},  {97, 131, 80}, {26, 64, 81},  {125, 390, 100}};
 
 bool same_bits(const Tensor& a, const Tensor& b) {
   if (a.rows() != b.rows() || a.cols() != b.cols()) return false;
@@ -158,7 +159,7 @@ TEST_CASE("gemm_prepacked bf16: pre-converted bf16 rows give the float A's produ
       const Tensor A = random(rng, s.m, s.k, true), B = random(rng, s.k, s.n, false);
       const cpu::PrepackedB P = cpu::prepack_b(B, Precision::bf16);
       const std::int64_t ld = (s.k + 1) / 2 + 3;  // a row stride wider than the row
-      std::vector<std::uint32_t> words(std::size_t((s.m + 23) / 24 * 24 * ld), 0xFFFFFFFFu);  // padding rows: NaN pairs
+      std::vector<std::uint32_t> words(std::size_t((s.m + 24) * ld), 0xFFFFFFFFu);  // padding rows: NaN pairs
       cpu::bf16_pairs(A, words.data(), ld);
       for (std::int64_t i = 0; i < s.m; ++i)
         for (std::int64_t kk = 0; kk < s.k; ++kk) {

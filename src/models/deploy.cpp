@@ -293,7 +293,7 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
       for (const Tensor& t : B.mod) {
         Shadow s;
         s.ld = (t.cols() / 2 + 15) / 16 * 16;  // 64-byte aligned rows
-        s.words.assign(std::size_t((n_ + 23) / 24 * 24 * s.ld), 0u);  // rows to a multiple of 24 (gemm_prepacked)
+        s.words.assign(std::size_t((n_ + 24) * s.ld), 0u);  // 24 rows more (gemm_prepacked on Bf16Rows)
         B.mod_bf16.push_back(std::move(s));
       }
     if (M.device == Device::cpu) {
