@@ -135,7 +135,7 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
       GATCORE_CHECK(a->models.empty(), "--baseline evaluates a classical method; drop --model");
       GATCORE_CHECK(!a->data.empty(), "--baseline needs --data DATASET");
       return eval_weight_baseline(a->baseline, a->data, a->part, a->poses, a->seed,
-                                  c.count("--min-weight") ? a->min_weight : -1.0, a->json_path);
+                                  c.count("--min-weight") ? a->min_weight : -1.0, a->json_path, a->common.quiet);
     }
     GATCORE_CHECK(!a->models.empty(), "--model is required (or --baseline)");
     GATCORE_CHECK(a->models.size() == 1, "--model: give one checkpoint (got ", a->models.size(),
@@ -157,7 +157,7 @@ int run_eval(const EvalArgs& a) {
     // Each character's own joints (no super skeleton): the baselines' protocol.
     if (data.empty() && l.file.metadata.count("data_path")) data = l.file.metadata.at("data_path");
     return gat::eval_weight_baseline("skinweights-any", data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
-                                      json_path, &l);
+                                      json_path, a.common.quiet, &l);
   }
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
