@@ -20,6 +20,7 @@
 #include "commands.hpp"
 #include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
@@ -61,9 +62,11 @@ int run_distill(const DistillArgs& a) {
   }
   const character::TrainingData td = [&] {
     Progress loading("preparing the characters of " + data, 0, "characters", a.common.quiet);
-    return character::load_training_data(data, loading.callback());
+    character::TrainingData t = character::load_training_data(data, loading.callback());
+    t.nearest_joints = character::checkpoint_nearest_joints(teacher.file, teacher_path);  // the student's too
+    return t;
   }();
-  GATCORE_CHECK(character::joined_bone_names(td.super) == md.at("skeleton"), data,
+  GATCORE_CHECK(td.nearest_joints > 0 || character::joined_bone_names(td.super) == md.at("skeleton"), data,
                 ": its super skeleton differs from the one ", teacher_path, " was trained on");
   GATCORE_CHECK(td.feature_dim(Task::displacement) == teacher.model->config().in_dim, data, ": ",
                 td.feature_dim(Task::displacement), " features per vertex, ", teacher_path, " takes ",
@@ -105,6 +108,7 @@ int run_distill(const DistillArgs& a) {
                                            {"skeleton", md.at("skeleton")},
                                            {"distortion_scales", character::format_distortion_scales(
                                                                      td.description.distortion_scales)},
+                                           {"joint_columns", character::format_joint_columns(td.nearest_joints)},
                                            {"distilled_from", std::filesystem::absolute(teacher_path).string()},
                                            {"distill_hard", std::to_string(hard)}};
   if (!quiet)

@@ -16,6 +16,7 @@
 #include "progress.hpp"
 #include "eval_motion.hpp"
 #include "eval_weight_baseline.hpp"
+#include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/viz/render.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
@@ -170,11 +171,12 @@ int run_eval(const EvalArgs& a) {
       gat::Progress loading("preparing the characters of " + data, 0, "characters", a.common.quiet);
       td_ = std::make_unique<character::TrainingData>(character::load_training_data(data, loading.callback()));
     }
+    if (cfg.task == Task::displacement) td_->nearest_joints = character::checkpoint_nearest_joints(l.file, path);
     const character::TrainingData& td = *td_;
     if (md.count("data_hash") && md.at("data_hash") != td.hash && md.count("data_path") && md.at("data_path") == data)
       std::fprintf(stderr, "gat eval: warning: %s has changed since %s was trained on it\n", data.c_str(), path.c_str());
     const std::string bones = character::joined_bone_names(td.super);
-    if (md.count("data_path") && md.count("skeleton") && md.at("skeleton") != bones) {
+    if (td.nearest_joints == 0 && md.count("data_path") && md.count("skeleton") && md.at("skeleton") != bones) {
       std::fprintf(stderr, "gat eval: %s's super skeleton (%s) differs from the checkpoint's (%s)\n", data.c_str(),
                    bones.c_str(), md.at("skeleton").c_str());
       return 2;
