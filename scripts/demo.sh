@@ -11,7 +11,9 @@
 #      animation and Blender-ready point caches,
 #   5. pictures: the weight error of the unseen character (gat eval --errormaps)
 #      and where plain skinning departs from the reference deformer (gat errormap),
-# and prints where the files are. About 4 minutes on a quiet 2-core machine after the build (the two --minutes budgets, 24 deformed frames at ~2.5 s each, loading).
+# and prints where the files are. About 2 minutes on 2 cores after the build,
+# almost all of it the two --minutes budgets (125 s measured on a 2-vCPU VM at
+# load average 3.5; README).
 # Usage: bash scripts/demo.sh [--out DIR] [--minutes M (per model, default 1)]
 # (`gat demo` is the kernels' smoke test: build/examples/gat demo.)
 set -euo pipefail

@@ -5,8 +5,10 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <random>
 
 #include "character_fixtures.hpp"
+#include "model_gradcheck.hpp"
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
@@ -104,6 +106,44 @@ TEST_CASE("skinweights-any trains on characters with different bone counts in on
     CHECK(y.at(v, 2) == 0.0f);
     CHECK(y.at(v, 3) == 0.0f);
   }
+}
+
+TEST_CASE("finite-difference gradients through a reduced skinweights-any, two bone counts in one batch", "[skin_any]") {
+  // The shared scorer (per vertex: stage-1 MLP, graph attention over the
+  // mesh, the per-candidate head) and the softmax over each vertex's own
+  // valid candidates: a humanoid (4 valid of 4) and a two-bone tube (2 of 4,
+  // 2 masked) in one batch, gradients of every parameter against central
+  // differences.
+  ProceduralOptions po;
+  po.kind = ProceduralKind::humanoid;
+  po.seed = 2;
+  po.ring_segments = 4;  // small meshes: few vertices near a kink of the
+  po.rings_per_bone = 1; // leaky ReLUs or the max pool within the step
+  const PreparedCharacter a = prepare_character(procedural_character(po), DeltaMushParams{0, 0.5f});
+  // The tube's vertices jittered: a symmetric tube has vertices with equal
+  // features, and the per-character max pool is not differentiable at such
+  // ties (central differences then see the mean of the one-sided slopes).
+  Character tube = charfix::tube_character(4, 5, 2.0f, 0.25f, 0.3f);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> jitter(-0.03f, 0.03f);
+  for (float& x : tube.mesh.positions) x += jitter(rng);
+  const PreparedCharacter b = prepare_character(tube);
+  const int k = 4;
+  std::vector<models::Sample> data{bone_candidate_sample(a, k), bone_candidate_sample(b, k)};
+  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+  cfg.stage1 = {8};
+  cfg.gc_heads = {2, 1};
+  cfg.gc_dims = {4, 4};
+  cfg.gc_pool = {0, 0};  // no geodesic pooling (skinweights-any)
+  cfg.global_mlp = {8};
+  cfg.classifier = {8};
+  auto model = models::make_model(cfg, 11);
+  const models::Normaliser norm = models::Normaliser::fit(data, false);
+  std::vector<const models::Sample*> p{&data[0], &data[1]};
+  const models::Batch batch = models::make_batch(p, {{}, {}}, norm, model->pool_sizes());
+  REQUIRE(batch.mask.defined());
+  const auto e = fixtures::model_gradcheck(*model, batch);
+  CHECK(e.size() >= 3 * model->registry().params.size());
 }
 
 TEST_CASE("skinweights-any predicts the same weights whatever the joints are called", "[skin_any]") {

@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
       lm = models::load_checkpoint(argv[4]);
       cd = std::make_unique<CorrectiveDeformer>(make_corrective_deformer(
           ch, character_model_bones(lm, argv[4], models::Task::displacement), {},
-          checkpoint_distortion_scales(lm.file, argv[4])));
+          checkpoint_distortion_scales(lm.file, argv[4]), checkpoint_nearest_joints(lm.file, argv[4])));
       lm.model->fold_batch_norm();
     }
     std::vector<double> t_lbs, t_dm, t_arap, t_net;

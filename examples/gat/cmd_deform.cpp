@@ -62,8 +62,9 @@ int run(const DeformArgs& a) {
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::displacement);
   const Character ch = load_character(in);
   const Motion motion = load_bvh(motion_path);
+  const int nearest = checkpoint_nearest_joints(lm.file, model_path);
   const CorrectiveDeformer d =
-      make_corrective_deformer(ch, bones, aliases, checkpoint_distortion_scales(lm.file, model_path));
+      make_corrective_deformer(ch, bones, aliases, checkpoint_distortion_scales(lm.file, model_path), nearest);
   RetargetOptions ro;  // --alias names joints for the retarget too (JOINT=PART or a known joint name)
   ro.target_name = in;
   ro.source_aliases = ro.target_aliases = aliases;
@@ -81,11 +82,15 @@ int run(const DeformArgs& a) {
   }
   lm.model->to(dev);
   lm.model->fold_batch_norm();
-  std::printf("gat deform: %s (%s) on %s (%lld vertices, %d of %d joints matched), %s frames %ld..%ld at %g fps, "
-              "device %s\n",
+  const std::string joints =
+      nearest > 0 ? std::to_string(ch.skeleton.num_joints()) + " joints, each vertex's " + std::to_string(nearest) +
+                        " nearest: any skeleton"
+                  : std::to_string(d.mapping.num_mapped()) + " of " + std::to_string(ch.skeleton.num_joints()) +
+                        " joints matched";
+  std::printf("gat deform: %s (%s) on %s (%lld vertices, %s), %s frames %ld..%ld at %g fps, device %s\n",
               lm.model->config().name.c_str(), model_path.c_str(), in.c_str(),
-              static_cast<long long>(ch.mesh.num_vertices()), d.mapping.num_mapped(), ch.skeleton.num_joints(),
-              motion_path.c_str(), first, last - 1, double(clip.fps), device_label(dev).c_str());
+              static_cast<long long>(ch.mesh.num_vertices()), joints.c_str(), motion_path.c_str(), first, last - 1,
+              double(clip.fps), device_label(dev).c_str());
   BakedFrames baked;
   baked.fps = clip.fps;
   double sum_f = 0, sum_i = 0, sum_t = 0, sum_corr = 0, max_corr = 0;

@@ -20,11 +20,13 @@
 #include "commands.hpp"
 #include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/distill.hpp"
 #include "gatcore/models/train.hpp"
+#include "progress.hpp"
 
 using namespace gatcore;
 using namespace gatcore::models;
@@ -58,8 +60,13 @@ int run_distill(const DistillArgs& a) {
     GATCORE_CHECK(md.count("data_path"), teacher_path, ": no data_path in the metadata; give --data");
     data = md.at("data_path");
   }
-  const character::TrainingData td = character::load_training_data(data);
-  GATCORE_CHECK(character::joined_bone_names(td.super) == md.at("skeleton"), data,
+  const character::TrainingData td = [&] {
+    Progress loading("preparing the characters of " + data, 0, "characters", a.common.quiet);
+    character::TrainingData t = character::load_training_data(data, loading.callback());
+    t.nearest_joints = character::checkpoint_nearest_joints(teacher.file, teacher_path);  // the student's too
+    return t;
+  }();
+  GATCORE_CHECK(td.nearest_joints > 0 || character::joined_bone_names(td.super) == md.at("skeleton"), data,
                 ": its super skeleton differs from the one ", teacher_path, " was trained on");
   GATCORE_CHECK(td.feature_dim(Task::displacement) == teacher.model->config().in_dim, data, ": ",
                 td.feature_dim(Task::displacement), " features per vertex, ", teacher_path, " takes ",
@@ -72,8 +79,15 @@ int run_distill(const DistillArgs& a) {
   cfg.loss = teacher.model->config().loss;
   auto student = make_model(cfg, std::uint64_t(seed));
 
+  const bool quiet = a.common.quiet;
   const auto part = [&](character::DatasetPart p, int epoch) {
-    std::vector<Sample> s = character::training_samples(td, Task::displacement, p, epoch, 1, int(samples));
+    const std::string which = p == character::DatasetPart::train ? "training" : "validation";
+    std::vector<Sample> s;
+    {
+      Progress making("making " + which + " samples", 0, "samples", quiet);
+      s = character::training_samples(td, Task::displacement, p, epoch, 1, int(samples), {}, making.callback());
+    }
+    Activity doing("computing the teacher's " + which + " targets");
     distill_targets(*teacher.model, teacher.norm, s, float(hard));
     return s;
   };
@@ -94,20 +108,33 @@ int run_distill(const DistillArgs& a) {
                                            {"skeleton", md.at("skeleton")},
                                            {"distortion_scales", character::format_distortion_scales(
                                                                      td.description.distortion_scales)},
+                                           {"joint_columns", character::format_joint_columns(td.nearest_joints)},
                                            {"distilled_from", std::filesystem::absolute(teacher_path).string()},
                                            {"distill_hard", std::to_string(hard)}};
-  std::printf("gat distill: %s (%lld parameters) imitating %s (%s, %lld parameters) on %s: %zu training / %zu "
+  if (!quiet)
+    std::printf("gat distill: %s (%lld parameters) imitating %s (%s, %lld parameters) on %s: %zu training / %zu "
               "validation samples, ground-truth weight %g, %d threads\n",
               cfg.name.c_str(), static_cast<long long>(student->registry().num_parameters()), teacher_path.c_str(),
               teacher.model->config().name.c_str(),
               static_cast<long long>(teacher.model->registry().num_parameters()), data.c_str(), train.size(),
               val.size(), hard, omp_get_max_threads());
   const auto t0 = std::chrono::steady_clock::now();
+  // One progress line for the whole run: the batches of every epoch (rate
+  // and time left over all of them), the epoch and its loss as the note.
+  Progress progress("distilling", 0, "batches", quiet);
+  const int first = trainer.epoch();
   while (trainer.epoch() < epochs) {
     if (trainer.epoch() > 0) train = part(character::DatasetPart::train, trainer.epoch());
-    const EpochStats st = trainer.run_epoch(train, val);
+    const EpochStats st = trainer.run_epoch(train, val, [&](int e, std::int64_t b, std::int64_t nb, double loss) {
+      progress.set_total(nb * (epochs - first));
+      char note[64];
+      std::snprintf(note, sizeof note, "epoch %d/%ld  loss %.5f", e, epochs, loss);
+      progress.update(std::int64_t(e - 1 - first) * nb + b, note);
+    });
+    progress.finish();  // the epoch's line below replaces it; the next batch redraws it
     save_checkpoint(out, *student, norm, &trainer, extra);
-    std::printf("epoch %d/%ld  train loss %.6f  val loss (vs teacher) %.6f  lr %.3g  (%.1f s)  -> %s\n", st.epoch,
+    if (!quiet)
+      std::printf("epoch %d/%ld  train loss %.6f  val loss (vs teacher) %.6f  lr %.3g  (%.1f s)  -> %s\n", st.epoch,
                 epochs, st.train_loss, st.val_loss, st.lr, st.seconds, out.c_str());
     std::fflush(stdout);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -16,6 +16,7 @@
 #include "progress.hpp"
 #include "eval_motion.hpp"
 #include "eval_weight_baseline.hpp"
+#include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/viz/render.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
@@ -135,7 +136,7 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
       GATCORE_CHECK(a->models.empty(), "--baseline evaluates a classical method; drop --model");
       GATCORE_CHECK(!a->data.empty(), "--baseline needs --data DATASET");
       return eval_weight_baseline(a->baseline, a->data, a->part, a->poses, a->seed,
-                                  c.count("--min-weight") ? a->min_weight : -1.0, a->json_path);
+                                  c.count("--min-weight") ? a->min_weight : -1.0, a->json_path, a->common.quiet);
     }
     GATCORE_CHECK(!a->models.empty(), "--model is required (or --baseline)");
     GATCORE_CHECK(a->models.size() == 1, "--model: give one checkpoint (got ", a->models.size(),
@@ -157,7 +158,7 @@ int run_eval(const EvalArgs& a) {
     // Each character's own joints (no super skeleton): the baselines' protocol.
     if (data.empty() && l.file.metadata.count("data_path")) data = l.file.metadata.at("data_path");
     return gat::eval_weight_baseline("skinweights-any", data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
-                                      json_path, &l);
+                                      json_path, a.common.quiet, &l);
   }
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
@@ -170,11 +171,12 @@ int run_eval(const EvalArgs& a) {
       gat::Progress loading("preparing the characters of " + data, 0, "characters", a.common.quiet);
       td_ = std::make_unique<character::TrainingData>(character::load_training_data(data, loading.callback()));
     }
+    if (cfg.task == Task::displacement) td_->nearest_joints = character::checkpoint_nearest_joints(l.file, path);
     const character::TrainingData& td = *td_;
     if (md.count("data_hash") && md.at("data_hash") != td.hash && md.count("data_path") && md.at("data_path") == data)
       std::fprintf(stderr, "gat eval: warning: %s has changed since %s was trained on it\n", data.c_str(), path.c_str());
     const std::string bones = character::joined_bone_names(td.super);
-    if (md.count("data_path") && md.count("skeleton") && md.at("skeleton") != bones) {
+    if (td.nearest_joints == 0 && md.count("data_path") && md.count("skeleton") && md.at("skeleton") != bones) {
       std::fprintf(stderr, "gat eval: %s's super skeleton (%s) differs from the checkpoint's (%s)\n", data.c_str(),
                    bones.c_str(), md.at("skeleton").c_str());
       return 2;

@@ -160,6 +160,8 @@ void print_model(const std::string& path) {
   if (features.empty())
     features = !l.file.metadata.count("data_path") ? "tube"
                : c.task == gatcore::models::Task::weights ? "neuroskinning" : "densegats";
+  if (const std::string jc = metadata(l.file, "joint_columns", ""); jc.rfind("nearest:", 0) == 0)
+    features += ", joint columns " + jc + " (each vertex's nearest joints: any skeleton)";
   if (const std::string scales = metadata(l.file, "distortion_scales", ""); !scales.empty())
     features += " + detail distortion at smoothing scales " + scales;
   std::printf("features   %lld in, %lld out (%s)\n", static_cast<long long>(c.in_dim), static_cast<long long>(c.out_dim),

@@ -53,17 +53,27 @@ int run(const PredictArgs& a) {
   GATCORE_CHECK(dir.empty() || std::filesystem::is_directory(dir), out, ": the directory ", dir.string(),
                 " does not exist");
   apply_threads(a.common);
+  // The steps of a prediction, one progress line (a large character's
+  // features and solve take seconds).
+  Progress progress("predict-weights " + in, heat ? 3 : 4, "steps", a.common.quiet);
+  progress.set_stages();
+  int step = 0;
+  const auto stage = [&](const char* what) { progress.update(step++, what); };
   if (heat) {
     GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with --method bone-heat (no model bones to match)");
+    stage("reading the character");
     const Character ch = load_gltf(in);
     BoneHeatParams bp;
     bp.max_influences = int(k);
     bp.min_weight = min_weight < 0 ? 0.01f : float(min_weight);
     Activity doing("computing the bone-heat weights of " + in);
+    stage("bone heat: visibility and heat diffusion");
     const auto t0 = std::chrono::steady_clock::now();
     const SkinWeights w = bone_heat_weights(ch, bp);
     const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stage("writing");
     save_gltf_with_weights(in, ch, w, out, int(k));
+    progress.finish();
     std::printf("gat predict-weights: bone heat on %s: %lld vertices welded (%lld in the file), %d joints\n",
                 in.c_str(), static_cast<long long>(ch.mesh.num_vertices()),
                 static_cast<long long>(ch.num_file_vertices()), ch.skeleton.num_joints());
@@ -74,16 +84,21 @@ int run(const PredictArgs& a) {
   }
   const Device dev = device_from_flag(a.common.device, "predict-weights");
   Activity reading("reading the checkpoint " + model_path);
+  stage("reading the checkpoint");
   models::LoadedModel lm = models::load_checkpoint(model_path);
   if (lm.model->config().name == "skinweights-any") {
     // Skeleton-agnostic: each vertex's own nearest bones, no names to match.
     GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with skinweights-any (it matches no bone names)");
+    stage("reading the character");
     const Character ch = load_gltf(in);
     lm.model->to(dev);
     lm.model->fold_batch_norm();
+    stage("features and inference");
     WeightPrediction p = predict_skin_weights_any(*lm.model, lm.norm, ch, int(k));
     if (min_weight > 0) p.weights = limit_weights(p.weights, int(k), float(min_weight));
+    stage("writing");
     save_gltf_with_weights(in, ch, p.weights, out, int(k));
+    progress.finish();
     std::printf("gat predict-weights: skinweights-any (%s, %lld candidate bones per vertex) on %s, device %s\n",
                 model_path.c_str(), static_cast<long long>(lm.model->config().out_dim), in.c_str(),
                 device_label(dev).c_str());
@@ -97,13 +112,17 @@ int run(const PredictArgs& a) {
     return 0;
   }
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::weights);
+  stage("reading the character");
   const Character ch = load_gltf(in);
   lm.model->to(dev);
   lm.model->fold_batch_norm();
   Activity doing("predicting the skin weights of " + in);
+  stage("features and inference");
   WeightPrediction p = predict_skin_weights(*lm.model, lm.norm, bones, ch, int(k), aliases);
   if (min_weight > 0) p.weights = limit_weights(p.weights, int(k), float(min_weight));
+  stage("writing");
   save_gltf_with_weights(in, ch, p.weights, out, int(k));
+  progress.finish();
 
   std::printf("gat predict-weights: %s (%s, %zu bones) on %s, device %s\n", lm.model->config().name.c_str(),
               model_path.c_str(), bones.size(), in.c_str(), device_label(dev).c_str());

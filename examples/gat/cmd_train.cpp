@@ -21,6 +21,8 @@
 #include "commands.hpp"
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
+#include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "progress.hpp"
@@ -45,7 +47,7 @@ void on_sigint(int) {
 }
 
 struct TrainArgs {
-  std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss;
+  std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss, joint_columns;
   long epochs = 10, seed = 0, batch = 0, samples = 64;
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
@@ -91,6 +93,10 @@ gat::Runner gat::setup_train(CLI::App& gat) {
              "densegats family: add a per-vertex linear map of the input columns to the output, set to the "
              "least-squares fit of the training targets before the first epoch (the graph network learns the "
              "residual; recorded in the checkpoint's configuration; not the paper's architecture)");
+  c.add_option("--joint-columns", a->joint_columns,
+               "displacement models' joint features: bones (default, the paper: distance to each bone of the "
+               "dataset's super skeleton, matched by name) or nearest:K (distances to each vertex's K nearest "
+               "joints, nearest first: the model then works on any skeleton, no joint names; e.g. nearest:4)");
   add_out(c, a->out, "checkpoint path")->capture_default_str();
   c.add_option("--epochs", a->epochs, "epochs to train, in total when resuming")
       ->check(int_in(1, 10000000))->capture_default_str();
@@ -133,7 +139,7 @@ namespace {
 
 int run_train(TrainArgs a) {
   std::string model_name = a.model_name, out = a.out, resume = a.resume, data = a.data, task = a.task,
-              curve = a.curve, loss = a.loss;
+              curve = a.curve, loss = a.loss, joint_columns = a.joint_columns;
   long epochs = a.epochs, seed = a.seed, batch = a.batch, samples = a.samples < 0 ? 64 : a.samples;
   const bool samples_set = a.samples >= 0;
   const float lr = a.lr;
@@ -183,6 +189,7 @@ int run_train(TrainArgs a) {
       td = std::make_unique<character::TrainingData>(character::load_training_data(data, loading.callback()));
     }
     if (resume.empty() && !samples_set) samples = 0;
+    if (resume.empty()) td->nearest_joints = character::parse_joint_columns(joint_columns, "--joint-columns");
     if (!resume.empty()) {
       const auto& md = loaded.file.metadata;
       if (md.count("data_hash") && md.at("data_hash") != td->hash) {
@@ -190,7 +197,15 @@ int run_train(TrainArgs a) {
                      data.c_str(), resume.c_str(), td->hash.c_str(), md.at("data_hash").c_str());
         return 2;
       }
-      if (md.count("skeleton") && md.at("skeleton") != character::joined_bone_names(td->super)) {
+      td->nearest_joints = character::checkpoint_nearest_joints(loaded.file, resume);
+      if (!joint_columns.empty() &&
+          character::parse_joint_columns(joint_columns, "--joint-columns") != td->nearest_joints) {
+        std::fprintf(stderr, "gat train: %s was trained with --joint-columns %s; a resumed run keeps it\n",
+                     resume.c_str(), character::format_joint_columns(td->nearest_joints).c_str());
+        return 2;
+      }
+      if (td->nearest_joints == 0 && md.count("skeleton") &&
+          md.at("skeleton") != character::joined_bone_names(td->super)) {
         std::fprintf(stderr, "gat train: %s's super skeleton differs from the one %s was trained on\n", data.c_str(),
                      resume.c_str());
         return 2;
@@ -200,6 +215,11 @@ int run_train(TrainArgs a) {
   if (resume.empty()) {
     ModelConfig cfg = ModelConfig::defaults(model_name, demo::kTubeFeatures);
     if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
+    if (td && td->nearest_joints > 0 && cfg.task != Task::displacement) {
+      std::fprintf(stderr, "gat train: --joint-columns applies to displacement models; %s learns skin weights "
+                           "(skinweights-any is the skin-weight model for any skeleton)\n", cfg.name.c_str());
+      return 2;
+    }
     if (td) cfg.in_dim = td->feature_dim(cfg.task);
     cfg.out_dim = cfg.task == Task::weights ? (td ? td->super.num_bones() : demo::kTubeBones) : 3;
     if (cfg.name == "skinweights-any") {  // its columns are each vertex's own nearest bones, not the super skeleton
@@ -309,8 +329,10 @@ int run_train(TrainArgs a) {
     extra["data_path"] = std::filesystem::absolute(data).string();
     extra["data_hash"] = td->hash;
     extra["skeleton"] = character::joined_bone_names(td->super);
-    if (cfg.task == Task::displacement)
+    if (cfg.task == Task::displacement) {
       extra["distortion_scales"] = character::format_distortion_scales(td->description.distortion_scales);
+      extra["joint_columns"] = character::format_joint_columns(td->nearest_joints);
+    }
     // For people reading the checkpoint: the feature layout ("features" above
     // is the key predict-weights / deform dispatch on); the columns follow "skeleton" (bone names normalised by
     // character::normalise_bone_name), the statistics are norm.mean / norm.inv_std.
@@ -321,6 +343,11 @@ int run_train(TrainArgs a) {
                             : cfg.task == Task::weights
                             ? "neuroskinning: rest position (3), rest normal (3), distance to each skeleton bone "
                               "segment; world frame, hips at the origin, height 1 (character::compute_normalisation)"
+                            : td->nearest_joints > 0
+                            ? "densegats, nearest joints: posed position (3), posed normal (3), distances to the "
+                              "vertex's joint_columns K nearest joints, nearest first (any skeleton; "
+                              "character/features/nearest_joints.hpp), then 3 per distortion scale; root frame, "
+                              "normalised like neuroskinning"
                             : "densegats: posed position (3), posed normal (3), distance to each skeleton joint, "
                               "then 3 per distortion scale (character/deform/detail_distortion.hpp); root frame, "
                               "normalised like neuroskinning";

@@ -21,6 +21,8 @@
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
+#include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
@@ -134,6 +136,7 @@ int gat::eval_motion(const EvalMotionArgs& args) {
   struct M {
     std::string label, file;
     LoadedModel l;
+    int nearest = 0;  // its joint columns (checkpoint_nearest_joints)
   };
   std::vector<M> models_;
   for (auto& [label, file] : model_args) {
@@ -141,11 +144,14 @@ int gat::eval_motion(const EvalMotionArgs& args) {
     const ModelConfig& cfg = m.l.model->config();
     GATCORE_CHECK(cfg.task == Task::displacement, file, ": model '", cfg.name,
                   "' predicts skin weights; --motion evaluates displacement models");
-    GATCORE_CHECK(cfg.in_dim == td.feature_dim(Task::displacement), file, " takes ", cfg.in_dim,
-                  " features; ", data, " has ", td.feature_dim(Task::displacement), " (distortion scales: ",
+    m.nearest = checkpoint_nearest_joints(m.l.file, file);
+    GATCORE_CHECK(cfg.in_dim == td.displacement_feature_dim(m.nearest), file, " takes ", cfg.in_dim,
+                  " features; ", data, " has ", td.displacement_feature_dim(m.nearest), " (joint columns ",
+                  format_joint_columns(m.nearest), ", distortion scales: ",
                   format_distortion_scales(td.description.distortion_scales), ")");
     const auto& md = m.l.file.metadata;
-    if (md.count("skeleton") && md.at("skeleton") != bones)
+    // Nearest-joint models name no bones: any dataset's skeletons will do.
+    if (m.nearest == 0 && md.count("skeleton") && md.at("skeleton") != bones)
       throw InvalidArgument(detail::cat(file, ": trained on a super skeleton (", md.at("skeleton"),
                                         ") that differs from ", data, "'s (", bones, ")"));
     if (m.label.empty()) m.label = cfg.name;
@@ -251,7 +257,15 @@ int gat::eval_motion(const EvalMotionArgs& args) {
         const std::vector<float> dqs = apply_normalisation(pc.norm, dual_quaternion_skinning(pc.character.mesh, S));
         std::vector<std::vector<float>> err(K, std::vector<float>(std::size_t(n)));
         std::vector<Tensor> preds;
-        for (auto& m : models_) preds.push_back(predict(*m.l.model, s, m.l.norm));
+        for (auto& m : models_) {
+          if (m.nearest == 0) {
+            preds.push_back(predict(*m.l.model, s, m.l.norm));
+            continue;
+          }
+          Sample sn = s;  // the same frame, this model's joint columns
+          sn.features = displacement_model_features(td, raw, m.nearest);
+          preds.push_back(predict(*m.l.model, sn, m.l.norm));
+        }
         if (linear_probe) preds.push_back(predict_linear(probe, s, probe_norm));
         // The target is in the root frame; the reference in the world's.
         // (Model errors are differences of two root-frame offsets: the same

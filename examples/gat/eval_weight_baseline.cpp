@@ -8,13 +8,15 @@
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
+#include "progress.hpp"
 
 using namespace gatcore;
 
 namespace gat {
 
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
-                         long seed, double min_weight, const std::string& json_path, models::LoadedModel* model) {
+                         long seed, double min_weight, const std::string& json_path, bool quiet,
+                         models::LoadedModel* model) {
   if (!model && method != "bone-heat") {
     std::fprintf(stderr, "gat eval: --baseline expects bone-heat, got '%s'\n", method.c_str());
     return 2;
@@ -27,7 +29,10 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     std::fprintf(stderr, "gat eval: --part expects test, validation or train, got '%s'\n", part.c_str());
     return 2;
   }
-  const character::TrainingData td = character::load_training_data(data);
+  const character::TrainingData td = [&] {
+    Progress loading("preparing the characters of " + data, 0, "characters", quiet);
+    return character::load_training_data(data, loading.callback());
+  }();
   const auto p = part == "test" ? character::DatasetPart::test
                  : part == "validation" ? character::DatasetPart::validation : character::DatasetPart::train;
   const auto& chars = td.part(p);
@@ -53,7 +58,9 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     std::printf("gat eval: bone heat (top %d, min weight %.3g) on the %zu %s characters of %s\n", bp.max_influences,
                 double(bp.min_weight), chars.size(), part.c_str(), data.c_str());
   std::vector<character::CharacterWeightEval> per;
+  Progress progress("evaluating " + part + " characters", std::int64_t(chars.size()), "characters", quiet);
   for (const std::int32_t c : chars) {
+    progress.update(std::int64_t(per.size()));
     const character::PreparedCharacter& pc = td.characters[std::size_t(c)];
     const auto& j2b = td.super.joint_to_bone[std::size_t(c)];
     const auto t0 = std::chrono::steady_clock::now();
@@ -67,7 +74,9 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     const std::string& entry = td.description.characters[std::size_t(c)];
     const std::filesystem::path f(entry);
     r.name = entry.rfind("procedural:", 0) == 0 ? entry : f.parent_path().filename().string() + "/" + f.stem().string();
-    std::printf("  %s: %lld vertices, %d joints, %.2f s\n", r.name.c_str(), static_cast<long long>(r.vertices),
+    progress.finish();  // the character's line replaces it
+    if (!quiet)
+      std::printf("  %s: %lld vertices, %d joints, %.2f s\n", r.name.c_str(), static_cast<long long>(r.vertices),
                 pc.character.skeleton.num_joints(), s);
     per.push_back(std::move(r));
   }

@@ -20,6 +20,6 @@ void print_weight_table(const std::vector<gatcore::character::CharacterWeightEva
                         const std::string& json_path);
 // model: null for a baseline (method "bone-heat"), else a skinweights-any checkpoint.
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
-                         long seed, double min_weight, const std::string& json_path,
+                         long seed, double min_weight, const std::string& json_path, bool quiet,
                          gatcore::models::LoadedModel* model = nullptr);
 }

@@ -46,7 +46,7 @@ void Progress::update(std::int64_t done, const std::string& note) {
                         static_cast<long long>(total_), unit_.c_str());
   if (total_ > 0 && n > 0 && n < int(sizeof line))
     n += std::snprintf(line + n, sizeof line - std::size_t(n), " (%.0f%%)", 100.0 * double(done) / double(total_));
-  if (done > 0 && n > 0 && n < int(sizeof line))
+  if (done > 0 && !stages_ && n > 0 && n < int(sizeof line))
     n += std::snprintf(line + n, sizeof line - std::size_t(n), "  %.3g %s/s  ETA %s", rate, unit_.c_str(),
                        hms(double(total_ - done) / rate).c_str());
   if (!note.empty() && n > 0 && n < int(sizeof line))

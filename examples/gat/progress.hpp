@@ -44,6 +44,9 @@ class Progress {
   // `done` of `total` finished; `note` is shown after the counts.
   void update(std::int64_t done, const std::string& note = "");
   void set_total(std::int64_t total) { total_ = total; }
+  // Steps of unequal length (read, features, inference, write): a rate and
+  // time left computed from them would mislead, so the line shows neither.
+  void set_stages() { stages_ = true; }
   // Clears the line (the summary follows on stdout).
   void finish();
   gatcore::ProgressFn callback();
@@ -56,7 +59,7 @@ class Progress {
   Activity activity_;  // the progress line's `what` is also what an error happened during
   std::string what_, unit_;
   std::int64_t total_;
-  bool draw_, drawn_ = false;
+  bool draw_, drawn_ = false, stages_ = false;
   std::chrono::steady_clock::time_point start_, last_;
   std::mutex mutex_;  // callback() may be called from worker threads
 };

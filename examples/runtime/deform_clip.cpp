@@ -11,9 +11,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <string>
 #include <vector>
+
+#include <CLI/CLI.hpp>
 
 #include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/features/features.hpp"
@@ -26,26 +27,31 @@ using namespace gatcore;
 using namespace gatcore::character;
 
 int main(int argc, char** argv) {
-  std::string model, character, motion, out;
-  runtime::DeviceChoice device = runtime::DeviceChoice::cpu;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-o" && i + 1 < argc) out = argv[++i];
-    else if (a == "--threads" && i + 1 < argc) omp_set_num_threads(std::max(1, std::atoi(argv[++i])));
-    else if (a == "--device" && i + 1 < argc) device = std::strcmp(argv[++i], "auto") ? runtime::DeviceChoice::cpu : runtime::DeviceChoice::automatic;
-    else if (model.empty()) model = a;
-    else if (character.empty()) character = a;
-    else if (motion.empty()) motion = a;
-    else {
-      std::fprintf(stderr, "unexpected argument '%s'\n", a.c_str());
-      return 2;
-    }
+  // Options through CLI11 like the gat tool (header-only; a missing or bad
+  // argument is named, --opt=value works).
+  std::string model, character, motion, out, device_name = "cpu";
+  int threads = 0;
+  CLI::App app("The runtime in an engine, minimally: deform CHARACTER with MOTION through the runtime's per-frame "
+               "call, print per-frame timings, optionally write a point cache.",
+               "runtime_deform_clip");
+  app.add_option("MODEL", model, "a corrective checkpoint (.gcm)")->required();
+  app.add_option("CHARACTER", character, "the character (.glb / .gltf / anything gat info reads)")->required();
+  app.add_option("MOTION", motion, "a BVH motion, retargeted onto the character")->required();
+  app.add_option("-o,--out", out, "write the deformed frames as a point cache (.pc2)");
+  app.add_option("--threads", threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")
+      ->check(CLI::Range(1, 1024));
+  app.add_option("--device", device_name, "cpu, or auto (Vulkan when a device is found)")
+      ->check(CLI::IsMember({"cpu", "auto"}))
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);  // prints the help, or the error naming the argument
+    return rc == 0 ? 0 : 2;      // usage errors: 2, as the gat tool
   }
-  if (motion.empty()) {
-    std::fprintf(stderr, "usage: runtime_deform_clip MODEL.gcm CHARACTER.glb MOTION.bvh [-o OUT.pc2] [--threads T] "
-                         "[--device cpu|auto]\n");
-    return 2;
-  }
+  if (threads > 0) omp_set_num_threads(threads);
+  const runtime::DeviceChoice device =
+      device_name == "auto" ? runtime::DeviceChoice::automatic : runtime::DeviceChoice::cpu;
   try {
     // ---- load and bind: once per character ----
     runtime::Deformer deformer = runtime::Deformer::load(model, device);

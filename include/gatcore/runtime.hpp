@@ -101,7 +101,8 @@ class Deformer {
   std::int64_t parameter_count() const;
   Device device() const;
   Precision precision() const;
-  // Joints of the bound character that matched a model bone.
+  // Joints of the bound character that matched a model bone (a model with
+  // nearest-joint columns uses every joint, whatever its name: all of them).
   std::int32_t mapped_joints() const;
 
  private:

@@ -18,6 +18,7 @@
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/features/features.hpp"
 #include "gatcore/character/features/frame_features.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/features/prepared_character.hpp"
 #include "gatcore/character/rig/parallel.hpp"
 #include "gatcore/error.hpp"
@@ -42,6 +43,7 @@ struct LoadedCorrective {
   std::shared_ptr<const models::DeployModel> model;
   std::vector<std::string> bones;
   std::vector<int> scales;
+  int nearest = 0;  // > 0: joint columns = each vertex's K nearest joints (any skeleton, no mapping)
   std::string path;
 };
 
@@ -82,6 +84,7 @@ Deformer Deformer::load(const std::string& path, DeviceChoice device, Precision 
   auto m = std::make_shared<LoadedCorrective>();
   m->bones = character_model_bones(lm, path, models::Task::displacement);
   m->scales = checkpoint_distortion_scales(lm.file, path);
+  m->nearest = checkpoint_nearest_joints(lm.file, path);
   GATCORE_CHECK(models::deployable(lm.model->config()), path, ": model '", lm.model->config().name,
                 "' has no runtime path (densegats, densegats-noself, densegats-nodense, origat)");
   m->model = models::make_deploy_model(*lm.model, lm.norm, dev, precision);
@@ -107,9 +110,10 @@ void Deformer::bind(const Mesh& rest, const Skeleton& skeleton, const BindOption
   // As make_corrective_deformer: no Delta Mush smoothing, only its one-ring
   // adjacency (distortion columns), the mesh graph and the normalisation.
   b->pc = prepare_character(ch, DeltaMushParams{0, 0.5f}, model_->scales);
-  b->mapping = map_bones(ch.skeleton, model_->bones, opt.aliases, ch.name);
+  if (model_->nearest == 0) b->mapping = map_bones(ch.skeleton, model_->bones, opt.aliases, ch.name);
   const models::ModelConfig& cfg = models::deploy_config(*model_->model);
-  const std::int64_t B = std::int64_t(model_->bones.size()), S = std::int64_t(model_->scales.size());
+  const std::int64_t B = model_->nearest > 0 ? model_->nearest : std::int64_t(model_->bones.size()),
+                     S = std::int64_t(model_->scales.size());
   GATCORE_CHECK(6 + B + 3 * S == cfg.in_dim, opt.name, ": ", 6 + B + 3 * S,
                 " features (bones and distortion scales) for a model that takes ", cfg.in_dim);
   b->n = ch.mesh.num_vertices();
@@ -137,7 +141,10 @@ const std::vector<std::string>& Deformer::bones() const { return model_->bones; 
 std::int64_t Deformer::parameter_count() const { return models::deploy_parameter_count(*model_->model); }
 Device Deformer::device() const { return models::deploy_device(*model_->model); }
 Precision Deformer::precision() const { return models::deploy_precision(*model_->model); }
-std::int32_t Deformer::mapped_joints() const { return bound_ ? bound_->mapping.num_mapped() : 0; }
+std::int32_t Deformer::mapped_joints() const {
+  if (!bound_) return 0;
+  return model_->nearest > 0 ? bound_->J : bound_->mapping.num_mapped();
+}
 
 void Deformer::deform(std::span<const float> joint_globals, std::span<float> out, std::span<float> out_normals,
                       std::span<float> out_lbs) {
@@ -171,12 +178,17 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
   // The model's input: features_in_bone_order, then the distortion columns
   // (densegats_model_features).
   const Tensor& x = b.plan->input();
-  const std::int64_t B = std::int64_t(b.mapping.bone_to_joint.size()), f = 6 + B;
+  const int K = model_->nearest;
+  const std::int64_t B = K > 0 ? K : std::int64_t(b.mapping.bone_to_joint.size()), f = 6 + B;
   x.cols_slice(0, f).zero_();
   for (std::int64_t i = 0; i < n; ++i) {
     const float* src = b.features.row(i);
     float* dst = x.row(i);
     for (int c = 0; c < 6; ++c) dst[c] = src[c];
+    if (K > 0) {
+      nearest_joint_distances(src + 6, b.J, K, dst + 6);  // nearest_joint_columns
+      continue;
+    }
     for (std::int32_t j = 0; j < b.J; ++j)
       if (b.mapping.joint_to_bone[std::size_t(j)] >= 0) dst[6 + b.mapping.joint_to_bone[std::size_t(j)]] = src[6 + j];
   }

@@ -6,6 +6,7 @@
 #include <iterator>
 
 #include "gatcore/character/data/file_targets.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/error.hpp"
 
@@ -30,7 +31,12 @@ const std::vector<std::int32_t>& TrainingData::part(DatasetPart p) const {
 
 std::int64_t TrainingData::feature_dim(models::Task task) const {
   const auto S = static_cast<std::int64_t>(description.distortion_scales.size());
-  return 6 + super.num_bones() + (task == models::Task::displacement ? 3 * S : 0);
+  return task == models::Task::displacement ? displacement_feature_dim(nearest_joints) : 6 + super.num_bones();
+}
+
+std::int64_t TrainingData::displacement_feature_dim(int nearest) const {
+  const auto S = static_cast<std::int64_t>(description.distortion_scales.size());
+  return 6 + (nearest > 0 ? nearest : super.num_bones()) + 3 * S;
 }
 
 std::string file_hash(const std::string& path) {
@@ -101,6 +107,13 @@ Tensor to_super_columns(const Tensor& f, const std::vector<std::int32_t>& joint_
 
 }  // namespace
 
+Tensor displacement_model_features(const TrainingData& data, const DenseGatsSample& s, int nearest) {
+  const Tensor joints = nearest > 0 ? nearest_joint_columns(s.features, nearest)
+                                    : to_super_columns(s.features, data.super.joint_to_bone[std::size_t(s.character)],
+                                                       data.super.num_bones());
+  return densegats_model_features(joints, s);
+}
+
 std::vector<models::Sample> training_samples(const TrainingData& data, models::Task task, DatasetPart part,
                                              int epoch, int geodesic_k, int max_poses_per_character,
                                              const SampleFilter& build, const ProgressFn& progress) {
@@ -135,8 +148,7 @@ std::vector<models::Sample> training_samples(const TrainingData& data, models::T
     stream_densegats_samples(data.characters, todo, [&](DenseGatsSample&& s) {
       models::Sample& m = out[where[k++]];
       m.name = name(s.character, s.pose);
-      m.features = densegats_model_features(
-          to_super_columns(s.features, data.super.joint_to_bone[std::size_t(s.character)], B), s);
+      m.features = displacement_model_features(data, s, data.nearest_joints);
       m.target = std::move(s.target);
       m.graph = share(std::move(s.graph));
       report_progress(progress, std::int64_t(k), std::int64_t(todo.size()));
@@ -170,10 +182,10 @@ models::Sample densegats_full_sample(const TrainingData& data, std::int32_t char
   GATCORE_CHECK(character >= 0 && character < static_cast<std::int32_t>(data.characters.size()),
                 "densegats_full_sample: character ", character, " of ", data.characters.size());
   DenseGatsSample s = make_densegats_sample(data.characters[std::size_t(character)], pose, 0, 0, true, target_frame);
+  s.character = character;
   models::Sample m;
   m.name = data.description.characters[std::size_t(character)];
-  m.features = densegats_model_features(
-      to_super_columns(s.features, data.super.joint_to_bone[std::size_t(character)], data.super.num_bones()), s);
+  m.features = displacement_model_features(data, s, data.nearest_joints);
   m.target = s.target;
   m.graph = share(std::move(s.graph));
   if (raw) *raw = std::move(s);

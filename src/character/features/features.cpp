@@ -117,6 +117,16 @@ std::vector<Vec3> joint_positions(std::span<const Mat4> globals) {
   return p;
 }
 
+namespace {
+// Columns 0-5 of both papers' features: the posed position and normal.
+inline void put_position_normal(float* r, std::span<const float> pos, std::span<const float> nrm, std::int64_t v) {
+  for (int c = 0; c < 3; ++c) {
+    r[c] = pos[3 * v + c];
+    r[3 + c] = nrm[3 * v + c];
+  }
+}
+}  // namespace
+
 Tensor densegats_features(std::span<const float> pos, std::span<const float> nrm, std::span<const Vec3> joints) {
   Tensor x = Tensor::empty(static_cast<std::int64_t>(pos.size() / 3), 6 + static_cast<std::int64_t>(joints.size()));
   densegats_features(pos, nrm, joints, x);
@@ -132,10 +142,7 @@ void densegats_features(std::span<const float> pos, std::span<const float> nrm, 
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float* r = x.row(v);
-    for (int c = 0; c < 3; ++c) {
-      r[c] = pos[3 * v + c];
-      r[3 + c] = nrm[3 * v + c];
-    }
+    put_position_normal(r, pos, nrm, v);
     for (std::int64_t j = 0; j < J; ++j) {
       float d2 = 0.0f;
       for (int c = 0; c < 3; ++c) d2 += (pos[3 * v + c] - joints[j][c]) * (pos[3 * v + c] - joints[j][c]);
@@ -159,10 +166,7 @@ Tensor neuroskinning_features(std::span<const float> pos, std::span<const float>
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
     float* r = x.row(v);
-    for (int c = 0; c < 3; ++c) {
-      r[c] = pos[3 * v + c];
-      r[3 + c] = nrm[3 * v + c];
-    }
+    put_position_normal(r, pos, nrm, v);
     for (std::int64_t j = 0; j < J; ++j) {
       float d = dist_point_segment(&pos[3 * v], joints[j], joints[j]);
       for (std::int32_t c : children[j]) d = std::min(d, dist_point_segment(&pos[3 * v], joints[j], joints[c]));

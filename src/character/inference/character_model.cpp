@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "gatcore/character/deform/detail_distortion.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -29,6 +30,11 @@ std::vector<int> checkpoint_distortion_scales(const models::CheckpointFile& f, c
   const auto it = f.metadata.find("distortion_scales");
   if (it == f.metadata.end()) return {};
   return parse_distortion_scales(it->second, path + ": metadata 'distortion_scales'");
+}
+
+int checkpoint_nearest_joints(const models::CheckpointFile& f, const std::string& path) {
+  const auto it = f.metadata.find("joint_columns");
+  return it == f.metadata.end() ? 0 : parse_joint_columns(it->second, path + ": metadata 'joint_columns'");
 }
 
 const char* feature_kind_name(FeatureKind k) {
@@ -61,8 +67,13 @@ std::vector<std::string> character_model_bones(const models::LoadedModel& m, con
   for (std::string b; std::getline(ss, b, ',');) bones.push_back(b);
   const auto B = static_cast<std::int64_t>(bones.size());
   const auto S = weights ? 0 : static_cast<std::int64_t>(checkpoint_distortion_scales(m.file, path).size());
-  GATCORE_CHECK(cfg.in_dim == 6 + B + 3 * S, path, ": the model takes ", cfg.in_dim, " features but its skeleton has ",
-                B, " bones and ", S, " distortion scales (expected 6 + ", B, " + 3 * ", S, ")");
+  const int K = weights ? 0 : checkpoint_nearest_joints(m.file, path);
+  if (K > 0)
+    GATCORE_CHECK(cfg.in_dim == 6 + K + 3 * S, path, ": the model takes ", cfg.in_dim, " features but its metadata "
+                  "says ", K, " nearest joints and ", S, " distortion scales (expected 6 + ", K, " + 3 * ", S, ")");
+  else
+    GATCORE_CHECK(cfg.in_dim == 6 + B + 3 * S, path, ": the model takes ", cfg.in_dim, " features but its skeleton has ",
+                  B, " bones and ", S, " distortion scales (expected 6 + ", B, " + 3 * ", S, ")");
   GATCORE_CHECK(!weights || cfg.out_dim == B, path, ": the model outputs ", cfg.out_dim, " bones but its skeleton has ",
                 B);
   return bones;

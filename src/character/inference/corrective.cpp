@@ -4,17 +4,24 @@
 #include <cmath>
 
 #include "gatcore/character/features/frame_features.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/train.hpp"
 
 namespace gatcore::character {
 
 CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
-                                            const BoneAliases& aliases, std::span<const int> distortion_scales) {
+                                            const BoneAliases& aliases, std::span<const int> distortion_scales,
+                                            int nearest_joints) {
   CorrectiveDeformer d;
   // No Delta Mush smoothing (iterations 0): only its one-ring adjacency is
   // used (distortion columns), with the mesh graph and the normalisation.
   d.prepared = prepare_character(ch, DeltaMushParams{0, 0.5f}, distortion_scales);
+  d.nearest_joints = nearest_joints;
+  if (nearest_joints > 0) {
+    GATCORE_CHECK(ch.skeleton.num_joints() > 0, ch.name, ": no joints");
+    return d;  // no names to match
+  }
   d.mapping = map_bones(ch.skeleton, bones, aliases, ch.name);
   d.num_bones = static_cast<std::int64_t>(bones.size());
   return d;
@@ -32,7 +39,9 @@ CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, c
   const std::vector<std::int32_t> vertices = all_vertices(pc.character.mesh.num_vertices());
   models::Sample s;
   s.name = pc.character.name;
-  s.features = densegats_model_features(features_in_bone_order(densegats_frame_features(frame, vertices), d.mapping),
+  const Tensor joint_features = densegats_frame_features(frame, vertices);
+  s.features = densegats_model_features(d.nearest_joints > 0 ? nearest_joint_columns(joint_features, d.nearest_joints)
+                                                             : features_in_bone_order(joint_features, d.mapping),
                                         distortion_frame_features(pc, frame, vertices));
   GATCORE_CHECK(s.features.cols() == model.config().in_dim, s.name, ": ", s.features.cols(),
                 " features (bones and distortion scales) for a model that takes ", model.config().in_dim);

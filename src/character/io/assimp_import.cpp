@@ -44,6 +44,24 @@ std::size_t key_before(const Key* keys, unsigned n, double t) {
   return k;
 }
 
+// The keys around time t and the linear blend between them (u = 0 before
+// the first key and after the last: the nearest key holds).
+struct KeyBlend {
+  std::size_t k0, k1;
+  float u;
+};
+template <class Key>
+KeyBlend key_blend(const Key* keys, unsigned n, double t) {
+  const std::size_t k = key_before(keys, n, t);
+  const std::size_t k1 = std::min<std::size_t>(k + 1, n - 1);
+  const double t0 = keys[k].mTime, t1 = keys[k1].mTime;
+  return {k, k1, t1 > t0 ? static_cast<float>(std::clamp((t - t0) / (t1 - t0), 0.0, 1.0)) : 0.0f};
+}
+Vec3 lerp_keys(const aiVectorKey* keys, const KeyBlend& b) {
+  const aiVector3D a0 = keys[b.k0].mValue, a1 = keys[b.k1].mValue;
+  return {a0.x + b.u * (a1.x - a0.x), a0.y + b.u * (a1.y - a0.y), a0.z + b.u * (a1.z - a0.z)};
+}
+
 constexpr unsigned kReadFlags = aiProcess_Triangulate;
 constexpr unsigned kProbeSeconds = 300;
 
@@ -279,30 +297,15 @@ Character load_assimp_character(const std::string& path, const ImportOptions& op
         Pose p = rest_pose(sk);
         for (const auto& [j, c] : chans) {
           Transform& x = p.local[j];
-          if (c->mNumPositionKeys) {
-            const std::size_t k = key_before(c->mPositionKeys, c->mNumPositionKeys, t);
-            const std::size_t k1 = std::min<std::size_t>(k + 1, c->mNumPositionKeys - 1);
-            const double t0 = c->mPositionKeys[k].mTime, t1 = c->mPositionKeys[k1].mTime;
-            const float u = t1 > t0 ? static_cast<float>(std::clamp((t - t0) / (t1 - t0), 0.0, 1.0)) : 0.0f;
-            const aiVector3D a0 = c->mPositionKeys[k].mValue, a1 = c->mPositionKeys[k1].mValue;
-            x.translation = {a0.x + u * (a1.x - a0.x), a0.y + u * (a1.y - a0.y), a0.z + u * (a1.z - a0.z)};
-          }
+          if (c->mNumPositionKeys)
+            x.translation = lerp_keys(c->mPositionKeys, key_blend(c->mPositionKeys, c->mNumPositionKeys, t));
           if (c->mNumRotationKeys) {
-            const std::size_t k = key_before(c->mRotationKeys, c->mNumRotationKeys, t);
-            const std::size_t k1 = std::min<std::size_t>(k + 1, c->mNumRotationKeys - 1);
-            const double t0 = c->mRotationKeys[k].mTime, t1 = c->mRotationKeys[k1].mTime;
-            const float u = t1 > t0 ? static_cast<float>(std::clamp((t - t0) / (t1 - t0), 0.0, 1.0)) : 0.0f;
-            const aiQuaternion q0 = c->mRotationKeys[k].mValue, q1 = c->mRotationKeys[k1].mValue;
-            x.rotation = quat_slerp({q0.x, q0.y, q0.z, q0.w}, {q1.x, q1.y, q1.z, q1.w}, u);
+            const KeyBlend b = key_blend(c->mRotationKeys, c->mNumRotationKeys, t);
+            const aiQuaternion q0 = c->mRotationKeys[b.k0].mValue, q1 = c->mRotationKeys[b.k1].mValue;
+            x.rotation = quat_slerp({q0.x, q0.y, q0.z, q0.w}, {q1.x, q1.y, q1.z, q1.w}, b.u);
           }
-          if (c->mNumScalingKeys) {
-            const std::size_t k = key_before(c->mScalingKeys, c->mNumScalingKeys, t);
-            const std::size_t k1 = std::min<std::size_t>(k + 1, c->mNumScalingKeys - 1);
-            const double t0 = c->mScalingKeys[k].mTime, t1 = c->mScalingKeys[k1].mTime;
-            const float u = t1 > t0 ? static_cast<float>(std::clamp((t - t0) / (t1 - t0), 0.0, 1.0)) : 0.0f;
-            const aiVector3D a0 = c->mScalingKeys[k].mValue, a1 = c->mScalingKeys[k1].mValue;
-            x.scale = {a0.x + u * (a1.x - a0.x), a0.y + u * (a1.y - a0.y), a0.z + u * (a1.z - a0.z)};
-          }
+          if (c->mNumScalingKeys)
+            x.scale = lerp_keys(c->mScalingKeys, key_blend(c->mScalingKeys, c->mNumScalingKeys, t));
           for (float v : x.translation)
             if (!std::isfinite(v)) fail("animation '", clip.name, "' joint '", sk.names[j], "' is not finite");
           for (float v : x.rotation)

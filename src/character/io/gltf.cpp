@@ -130,32 +130,8 @@ struct Reader {
   }
 };
 
-Transform node_local(const tinygltf::Node& n) {
-  if (n.matrix.size() == 16) {
-    Mat4 m;
-    for (int i = 0; i < 16; ++i) m[i] = static_cast<float>(n.matrix[i]);
-    return to_transform(m);
-  }
-  Transform t;
-  if (n.translation.size() == 3)
-    for (int i = 0; i < 3; ++i) t.translation[i] = static_cast<float>(n.translation[i]);
-  if (n.rotation.size() == 4) {
-    for (int i = 0; i < 4; ++i) t.rotation[i] = static_cast<float>(n.rotation[i]);
-    t.rotation = quat_normalize(t.rotation);
-  }
-  if (n.scale.size() == 3)
-    for (int i = 0; i < 3; ++i) t.scale[i] = static_cast<float>(n.scale[i]);
-  return t;
-}
-
-Mat4 node_matrix(const tinygltf::Node& n) {
-  if (n.matrix.size() == 16) {
-    Mat4 m;
-    for (int i = 0; i < 16; ++i) m[i] = static_cast<float>(n.matrix[i]);
-    return m;
-  }
-  return to_matrix(node_local(n));
-}
+using gltf_util::node_local;
+using gltf_util::node_matrix;
 
 // Sampled channel value at time t.
 struct Channel {

@@ -72,20 +72,31 @@ int append_vec3(tinygltf::Model& m, const std::vector<float>& xyz) {
   return a;
 }
 
-Mat4 node_matrix(const tinygltf::Node& n) {
+Transform node_local(const tinygltf::Node& n) {
   if (n.matrix.size() == 16) {
     Mat4 m;
     for (int i = 0; i < 16; ++i) m[i] = static_cast<float>(n.matrix[i]);
-    return m;
+    return to_transform(m);
   }
   Transform t;
   if (n.translation.size() == 3)
     for (int i = 0; i < 3; ++i) t.translation[i] = static_cast<float>(n.translation[i]);
-  if (n.rotation.size() == 4)
+  if (n.rotation.size() == 4) {
     for (int i = 0; i < 4; ++i) t.rotation[i] = static_cast<float>(n.rotation[i]);
+    t.rotation = quat_normalize(t.rotation);  // files store slightly unnormalised quaternions
+  }
   if (n.scale.size() == 3)
     for (int i = 0; i < 3; ++i) t.scale[i] = static_cast<float>(n.scale[i]);
-  return to_matrix(t);
+  return t;
+}
+
+Mat4 node_matrix(const tinygltf::Node& n) {
+  if (n.matrix.size() == 16) {  // exactly the file's matrix (no TRS round trip)
+    Mat4 m;
+    for (int i = 0; i < 16; ++i) m[i] = static_cast<float>(n.matrix[i]);
+    return m;
+  }
+  return to_matrix(node_local(n));
 }
 
 std::vector<Mat4> node_globals(const tinygltf::Model& m, const std::string& file) {

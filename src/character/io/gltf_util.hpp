@@ -28,7 +28,9 @@ int append_accessor(tinygltf::Model& m, const void* data, std::size_t bytes, int
                     std::size_t count);
 // Float VEC3 accessor with the min / max glTF requires for POSITION data.
 int append_vec3(tinygltf::Model& m, const std::vector<float>& xyz);
-// The node's local matrix (matrix, else TRS).
+// The node's local transform (TRS, rotation normalised; a matrix decomposed).
+Transform node_local(const tinygltf::Node& n);
+// The node's local matrix (its matrix as written, else TRS).
 Mat4 node_matrix(const tinygltf::Node& n);
 // Global rest matrices of every node (throws on cycles / bad children).
 std::vector<Mat4> node_globals(const tinygltf::Model& m, const std::string& file);

@@ -38,9 +38,16 @@ struct TrainingData {
   std::vector<PreparedCharacter> characters;  // all of the dataset's characters
   std::vector<Motion> motions;
   SuperSkeleton super;
+  // Displacement samples' joint columns: 0, the super skeleton's bones (the
+  // paper); K > 0, the distances to each vertex's K nearest joints, any
+  // skeleton (features/nearest_joints.hpp). Set by the trainer (gat train
+  // --joint-columns) or from a checkpoint before making samples.
+  int nearest_joints = 0;
 
-  // 6 + bones, plus 3 per distortion scale for the displacement task.
+  // 6 + bones (or + K nearest joints), plus 3 per distortion scale for the displacement task.
   std::int64_t feature_dim(models::Task task) const;
+  // The displacement width for `nearest` joint columns (0: bones), whatever nearest_joints is.
+  std::int64_t displacement_feature_dim(int nearest) const;
   const std::vector<std::int32_t>& part(DatasetPart p) const;
 };
 
@@ -74,6 +81,12 @@ std::vector<models::Sample> training_samples(const TrainingData& data, models::T
 // normalised units: world = normalised / norm.scale + norm.origin).
 // `target_frame` >= 0: the frame of the character's file targets (pose =
 // its target_poses[target_frame]).
+// A displacement sample's model input from the pipeline's sample (joint
+// columns in the character's joint order): its joint columns by `nearest`
+// (0: the super skeleton's bones; K: the K nearest joints), then the
+// distortion columns. Lets one evaluation serve models of both layouts.
+Tensor displacement_model_features(const TrainingData& data, const DenseGatsSample& s, int nearest);
+
 models::Sample densegats_full_sample(const TrainingData& data, std::int32_t character, const Pose& pose,
                                      DenseGatsSample* raw = nullptr, std::int32_t target_frame = -1);
 

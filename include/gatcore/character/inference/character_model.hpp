@@ -24,10 +24,15 @@ const char* feature_kind_name(FeatureKind k);
 // (metadata "distortion_scales"; absent: none, the paper's features).
 std::vector<int> checkpoint_distortion_scales(const models::CheckpointFile& f, const std::string& path);
 
+// The joint columns of a displacement checkpoint (metadata "joint_columns":
+// "bones", the paper's, or "nearest:K", any skeleton; absent: "bones"):
+// 0 or K (features/nearest_joints.hpp).
+int checkpoint_nearest_joints(const models::CheckpointFile& f, const std::string& path);
+
 // Checks that the checkpoint `path` holds a model of `task` trained on
 // character features (not the embedded tube) and returns its bones (metadata
-// "skeleton"), consistent with the model's input width (6 + |B|, plus 3 per
-// distortion scale for displacements) and, for
+// "skeleton"), consistent with the model's input width (6 + |B|, or 6 + K
+// for nearest-joint columns, plus 3 per distortion scale for displacements) and, for
 // skin weights, its output width (|B|). Throws InvalidArgument naming the
 // file and what does not fit (e.g. a DenseGATs checkpoint given for weights).
 std::vector<std::string> character_model_bones(const models::LoadedModel& m, const std::string& path,

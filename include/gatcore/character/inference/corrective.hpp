@@ -17,12 +17,16 @@ namespace gatcore::character {
 
 struct CorrectiveDeformer {
   PreparedCharacter prepared;  // world frame; poses are of prepared.character.skeleton
-  BoneMapping mapping;         // joints -> the model's bones
+  BoneMapping mapping;         // joints -> the model's bones (empty with nearest-joint columns)
   std::int64_t num_bones = 0;
+  int nearest_joints = 0;      // > 0: the model's joint columns are each vertex's K nearest joints
 };
-// `distortion_scales`: those the model was trained with (checkpoint_distortion_scales).
+// `distortion_scales`: those the model was trained with (checkpoint_distortion_scales);
+// `nearest_joints`: checkpoint_nearest_joints (0: map the joints onto `bones`
+// by name; K: any skeleton, `bones` and `aliases` unused).
 CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
-                                            const BoneAliases& aliases = {}, std::span<const int> distortion_scales = {});
+                                            const BoneAliases& aliases = {}, std::span<const int> distortion_scales = {},
+                                            int nearest_joints = 0);
 
 struct CorrectedFrame {
   std::vector<float> lbs;        // [3 n] LBS positions, glTF world frame (welded vertices)
