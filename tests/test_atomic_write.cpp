@@ -12,6 +12,7 @@
 #include <iterator>
 
 #include "gatcore/atomic_file.hpp"
+#include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/io/gltf.hpp"
@@ -79,7 +80,7 @@ TEST_CASE("write_file_atomic: all or nothing", "[io][atomic]") {
                     Contains("no_such_dir/x.bin") && Contains("No such file or directory"));
 }
 
-TEST_CASE("glTF, point cache and checkpoint writers fail cleanly on a full disk", "[io][atomic]") {
+TEST_CASE("glTF, point cache, checkpoint and dataset writers fail cleanly on a full disk", "[io][atomic]") {
   const fs::path dir = fs::temp_directory_path() / "gatcore_atomic_test";
   fs::create_directories(dir);
   const character::Character ch = character::procedural_character();
@@ -98,4 +99,12 @@ TEST_CASE("glTF, point cache and checkpoint writers fail cleanly on a full disk"
   f.tensors.emplace_back("w", Tensor::full(16, 16, 0.5f));
   check_full_disk(dir / "m.gcm", [&] { models::write_checkpoint_file((dir / "m.gcm").string(), f); });
   CHECK(models::read_checkpoint_file((dir / "m.gcm").string()).tensors.size() == 1);
+
+  // gat dataset build's output (issue #20 item 13: its own temp-file code
+  // left OUT.tmp behind when the write failed).
+  const character::DatasetDescription d =
+      character::describe_dataset({"procedural:humanoid:0", "procedural:humanoid:1", "procedural:humanoid:2"}, {});
+  check_full_disk(dir / "d.json", [&] { character::save_dataset((dir / "d.json").string(), d); });
+  CHECK(character::load_dataset((dir / "d.json").string()).characters.size() == 3);
+
 }
