@@ -4,14 +4,19 @@
 // left; a stale temp file from a killed earlier write is cleaned.
 #include <catch2/catch.hpp>
 
+#include <dlfcn.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <string>
+#include <vector>
 
 #include "gatcore/atomic_file.hpp"
+#include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/io/gltf.hpp"
@@ -20,6 +25,29 @@
 using namespace gatcore;
 using Catch::Matchers::Contains;
 namespace fs = std::filesystem;
+
+// fsync and rename as gatcore calls them (libgatcore is linked statically into
+// this executable, so these definitions are the ones it calls): recorded while
+// `g_calls` is set, then passed on to the C library's.
+namespace {
+std::vector<std::string>* g_calls = nullptr;
+}  // namespace
+
+extern "C" int fsync(int fd) {
+  static const auto real = reinterpret_cast<int (*)(int)>(dlsym(RTLD_NEXT, "fsync"));
+  if (g_calls) {
+    char target[4096] = {};
+    const ::ssize_t n = ::readlink(("/proc/self/fd/" + std::to_string(fd)).c_str(), target, sizeof target - 1);
+    g_calls->push_back("fsync " + std::string(target, n > 0 ? std::size_t(n) : 0));
+  }
+  return real(fd);
+}
+
+extern "C" int rename(const char* from, const char* to) noexcept {
+  static const auto real = reinterpret_cast<int (*)(const char*, const char*)>(dlsym(RTLD_NEXT, "rename"));
+  if (g_calls) g_calls->push_back(std::string("rename ") + from + " -> " + to);
+  return real(from, to);
+}
 
 namespace {
 
@@ -79,7 +107,26 @@ TEST_CASE("write_file_atomic: all or nothing", "[io][atomic]") {
                     Contains("no_such_dir/x.bin") && Contains("No such file or directory"));
 }
 
-TEST_CASE("glTF, point cache and checkpoint writers fail cleanly on a full disk", "[io][atomic]") {
+TEST_CASE("write_file_atomic: the data is on disk before the rename, the rename before it returns", "[io][atomic]") {
+  // Issue #20 item 13: writes were not fsync'd before the rename, so a power
+  // cut could leave a renamed but empty file.
+  const fs::path dir = fs::canonical(fs::temp_directory_path()) / "gatcore_atomic_test";
+  fs::create_directories(dir);
+  const fs::path path = dir / "synced.bin";
+  std::vector<std::string> calls;
+  g_calls = &calls;
+  write_file_atomic(path.string(), "some bytes");
+  g_calls = nullptr;
+  REQUIRE(calls.size() == 3);
+  CHECK(calls[0].rfind("fsync " + path.string() + ".", 0) == 0);  // the temp file beside it
+  CHECK(calls[1].rfind("rename " + path.string() + ".", 0) == 0);
+  CHECK(calls[1].find(" -> " + path.string()) != std::string::npos);
+  CHECK(calls[2] == "fsync " + dir.string());  // the folder's entry
+  CHECK(slurp(path) == "some bytes");
+}
+
+TEST_CASE("glTF, point cache, checkpoint and dataset writers fail cleanly on a full disk", "[io][atomic]") {
+
   const fs::path dir = fs::temp_directory_path() / "gatcore_atomic_test";
   fs::create_directories(dir);
   const character::Character ch = character::procedural_character();
@@ -98,4 +145,12 @@ TEST_CASE("glTF, point cache and checkpoint writers fail cleanly on a full disk"
   f.tensors.emplace_back("w", Tensor::full(16, 16, 0.5f));
   check_full_disk(dir / "m.gcm", [&] { models::write_checkpoint_file((dir / "m.gcm").string(), f); });
   CHECK(models::read_checkpoint_file((dir / "m.gcm").string()).tensors.size() == 1);
+
+  // gat dataset build's output (issue #20 item 13: its own temp-file code
+  // left OUT.tmp behind when the write failed).
+  const character::DatasetDescription d =
+      character::describe_dataset({"procedural:humanoid:0", "procedural:humanoid:1", "procedural:humanoid:2"}, {});
+  check_full_disk(dir / "d.json", [&] { character::save_dataset((dir / "d.json").string(), d); });
+  CHECK(character::load_dataset((dir / "d.json").string()).characters.size() == 3);
+
 }

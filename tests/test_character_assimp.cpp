@@ -7,8 +7,12 @@
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/scene.h>
+#include <pthread.h>
+#include <unistd.h>
 
 #include <array>
+#include <atomic>
+#include <csignal>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -93,7 +97,40 @@ TEST_CASE("FBX import rejects bad files", "[character][fbx]") {
   CHECK_THROWS_WITH(load_character(bvh), Contains("uaf.bvh: a BVH file holds a motion, not a character"));
 }
 
+namespace {
+// Observes the forks of load_character's containment (issue #20 item 1):
+// pthread_atfork's handlers run in this process before each fork and in the
+// child after it. When `crash_child` is set the child dies of SIGSEGV before
+// it parses, standing in for a file that crashes assimp's importer.
+std::atomic<int> forks{0};
+std::atomic<bool> crash_child{false};
+void count_fork() { ++forks; }
+void child_after_fork() {
+  if (crash_child) {
+    std::signal(SIGSEGV, SIG_DFL);  // not Catch2's handler: the child just dies
+    ::raise(SIGSEGV);
+  }
+
+}
+}  // namespace
+
+TEST_CASE("assimp parses a user's file in a child process: a crash there refuses the file", "[character][fbx]") {
+  static const int registered = pthread_atfork(&count_fork, nullptr, &child_after_fork);
+  REQUIRE(registered == 0);
+  const std::string fbx = to_fbx(charfix::write_temp("fbx_probe.glb", charfix::skinned_glb()), "probe.fbx");
+  forks = 0;
+  CHECK_NOTHROW(load_character(fbx));
+  CHECK(forks == 1);  // parsed in a child first, then here
+  crash_child = true;
+  CHECK_THROWS_WITH(load_character(fbx), Contains("probe.fbx: the assimp importer failed on this file (signal " +
+                                                  std::to_string(SIGSEGV) + ")"));
+  crash_child = false;
+  CHECK(forks == 2);
+  CHECK_NOTHROW(load_character(fbx));  // this process is unharmed
+}
+
 TEST_CASE("FBX import of CesiumMan", "[character][fbx][data]") {
+
   const auto dir = charfix::data_dir();
   const auto p = dir / "characters" / "khronos" / "CesiumMan.glb";
   if (dir.empty() || !std::filesystem::exists(p)) {

@@ -11,6 +11,7 @@
 #include "character_fixtures.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/io/gltf.hpp"
+#include "gatcore/character/io/target_frames.hpp"
 #include "gatcore/error.hpp"
 
 using namespace gatcore::character;
@@ -147,6 +148,11 @@ TEST_CASE("glTF import reads external URIs only inside the model's folder", "[ch
   GltfImportOptions wide;
   wide.resource_root = top.string();
   CHECK_THROWS_WITH(load_gltf(gltf("escape.gltf", "../secret.bin"), wide), !Contains("refusing") && Contains("no skin"));
+  // The other glTF reader (gltf_util::read_model: a user's file re-read by
+  // deform / predict-weights exports and morph-target frames) is confined too.
+  CHECK_THROWS_WITH(read_morph_target_frames(charfix::tube_character(), gltf("escape.gltf", "../secret.bin")),
+                    Contains("escape.gltf") && Contains("refusing to read") && Contains("outside the model's folder"));
+
 }
 
 namespace {

@@ -6,6 +6,11 @@
 gat="$1"
 repro="$2"
 fail=0
+# Outputs the refused commands must not write: in a folder of this run's own
+# (a fixed /tmp name kept a file an earlier run or another build wrote).
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
 check() {  # check NAME_IN_MESSAGE COMMAND...
   name="$1"
   shift
@@ -26,12 +31,13 @@ done
 # Training on datasets gat dataset build would refuse: refused before any work
 # (motion_stride 0 used to loop until the OOM killer).
 for d in cli_motion_stride_0 cli_dataset_out_of_range; do
-  check "dataset.json" "$gat" train --data "$repro/$d/dataset.json" --epochs 1 --out /tmp/gatcore_cli_bad_inputs.gcm
+  check "dataset.json" "$gat" train --data "$repro/$d/dataset.json" --epochs 1 --out "$work/out.gcm"
 done
-check "random_poses" "$gat" train --data "$repro/cli_dataset_random_poses_2e9.json" --epochs 1 --out /tmp/gatcore_cli_bad_inputs.gcm
+check "random_poses" "$gat" train --data "$repro/cli_dataset_random_poses_2e9.json" --epochs 1 --out "$work/out.gcm"
 # Checkpoints whose header was edited (format version 1: the header was not covered).
-check "cli_checkpoint_lr_nan.gcm" "$gat" train --resume "$repro/cli_checkpoint_lr_nan.gcm" --epochs 2 --out /tmp/gatcore_cli_bad_inputs.gcm
+check "cli_checkpoint_lr_nan.gcm" "$gat" train --resume "$repro/cli_checkpoint_lr_nan.gcm" --epochs 2 --out "$work/out.gcm"
 check "cli_checkpoint_target_scale_abc.gcm" "$gat" eval --model "$repro/cli_checkpoint_target_scale_abc.gcm" --samples 1
 check "--samples" "$gat" eval --model "$repro/cli_checkpoint_lr_nan.gcm" --samples 2000000000
-[ ! -e /tmp/gatcore_cli_bad_inputs.gcm ] || { echo "FAIL: an output file was written"; fail=1; }
+[ -z "$(ls -A "$work")" ] || { echo "FAIL: an output file was written: $(ls "$work")"; fail=1; }
+
 exit $fail
