@@ -88,11 +88,14 @@ void check_full_disk(const fs::path& path, Write write) {
   }
   CHECK(slurp(path) == "old contents");
   CHECK_FALSE(fs::exists(path.string() + ".tmp"));
-  // Room again: the write succeeds, a stale temp file is cleaned.
+  // Room again: the write succeeds; stale temps of dead processes are cleaned.
   std::ofstream(path.string() + ".tmp", std::ios::binary) << "stale";
+  std::ofstream(path.string() + ".2147483646.0.tmp", std::ios::binary) << "stale";
   CHECK_NOTHROW(write());
   CHECK(slurp(path) != "old contents");
-  CHECK_FALSE(fs::exists(path.string() + ".tmp"));
+  for (const auto& e : fs::directory_iterator(path.parent_path()))
+    CHECK_FALSE((e.path().filename().string().rfind(path.filename().string() + ".", 0) == 0 &&
+                 e.path().extension() == ".tmp"));
 }
 
 }  // namespace
