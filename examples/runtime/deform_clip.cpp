@@ -6,6 +6,7 @@
 // (here a BVH retargeted onto the character stands in for it).
 //
 //   runtime_deform_clip MODEL.gcm CHARACTER.glb MOTION.bvh [-o OUT.pc2] [--threads T] [--device cpu|auto]
+//                       [--precision fp32|bf16]
 #include <omp.h>
 
 #include <algorithm>
@@ -29,7 +30,7 @@ using namespace gatcore::character;
 int main(int argc, char** argv) {
   // Options through CLI11 like the gat tool (header-only; a missing or bad
   // argument is named, --opt=value works).
-  std::string model, character, motion, out, device_name = "cpu";
+  std::string model, character, motion, out, device_name = "cpu", precision_name = "fp32";
   int threads = 0;
   CLI::App app("The runtime in an engine, minimally: deform CHARACTER with MOTION through the runtime's per-frame "
                "call, print per-frame timings, optionally write a point cache.",
@@ -43,6 +44,10 @@ int main(int argc, char** argv) {
   app.add_option("--device", device_name, "cpu, or auto (Vulkan when a device is found)")
       ->check(CLI::IsMember({"cpu", "auto"}))
       ->capture_default_str();
+  app.add_option("--precision", precision_name,
+                 "fp32, or bf16: the products in bfloat16 on CPUs with AVX512_BF16 (gatcore/precision.hpp)")
+      ->check(CLI::IsMember({"fp32", "bf16"}))
+      ->capture_default_str();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -54,7 +59,7 @@ int main(int argc, char** argv) {
       device_name == "auto" ? runtime::DeviceChoice::automatic : runtime::DeviceChoice::cpu;
   try {
     // ---- load and bind: once per character ----
-    runtime::Deformer deformer = runtime::Deformer::load(model, device);
+    runtime::Deformer deformer = runtime::Deformer::load(model, device, parse_precision(precision_name));
     const Character ch = load_character(character);
     deformer.bind(ch.mesh, ch.skeleton);
     std::printf("%s: %lld vertices, %d joints (%d matched to the model's bones); model %s, %lld parameters\n",
