@@ -130,7 +130,7 @@ int gat::eval_motion(const EvalMotionArgs& args) {
   GATCORE_CHECK(loss_curves.empty() || !map_dir.empty(), "--loss-curve writes into the --errormaps DIR; give one");
   const auto t0 = std::chrono::steady_clock::now();
   gat::Progress loading("preparing the characters of " + data, 0, "characters", args.quiet);
-  const TrainingData td = load_training_data(data, loading.callback());
+  TrainingData td = load_training_data(data, loading.callback());  // nearest_joints set per probe below
   loading.finish();
   const std::string bones = joined_bone_names(td.super);
   struct M {
@@ -166,19 +166,35 @@ int gat::eval_motion(const EvalMotionArgs& args) {
 
   std::vector<std::string> methods = {"LBS", "DQS"};
   for (const auto& m : models_) methods.push_back(m.label);
-  // The linear probe: least squares on the training characters' epoch-0 samples.
-  LinearMap probe;
-  Normaliser probe_norm;
+  // The linear probe: least squares on the training characters' epoch-0
+  // samples, one per joint-column layout among the models (a model is
+  // compared with the fit on its own inputs): "linear probe" on the paper's
+  // bone columns, "linear probe (nearest:K)" on nearest-joint ones.
+  struct Probe {
+    int nearest = 0;
+    LinearMap map;
+    Normaliser norm;
+  };
+  std::vector<Probe> probes;
   if (linear_probe) {
-    const auto tp = std::chrono::steady_clock::now();
-    const std::vector<Sample> train = training_samples(td, Task::displacement, DatasetPart::train, 0);
-    GATCORE_CHECK(!train.empty(), "gat eval: --linear-probe: ", data, " has no training samples");
-    probe_norm = Normaliser::fit(train, true);
-    probe = fit_linear_map(train, probe_norm, td.feature_dim(Task::displacement), 3);
-    std::printf("  linear probe: %lld training vertices, normalised MSE %.5f (zero: %.5f), %.1f s\n",
-                static_cast<long long>(probe.rows), probe.mse_after, probe.mse_before,
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - tp).count());
-    methods.push_back("linear probe");
+    std::vector<int> layouts{0};
+    for (const auto& m : models_)
+      if (std::find(layouts.begin(), layouts.end(), m.nearest) == layouts.end()) layouts.push_back(m.nearest);
+    for (int layout : layouts) {
+      const auto tp = std::chrono::steady_clock::now();
+      td.nearest_joints = layout;
+      const std::vector<Sample> train = training_samples(td, Task::displacement, DatasetPart::train, 0);
+      GATCORE_CHECK(!train.empty(), "gat eval: --linear-probe: ", data, " has no training samples");
+      Probe p{layout, {}, Normaliser::fit(train, true)};
+      p.map = fit_linear_map(train, p.norm, td.feature_dim(Task::displacement), 3);
+      const std::string label = layout > 0 ? "linear probe (" + format_joint_columns(layout) + ")" : "linear probe";
+      std::printf("  %s: %lld training vertices, normalised MSE %.5f (zero: %.5f), %.1f s\n", label.c_str(),
+                  static_cast<long long>(p.map.rows), p.map.mse_after, p.map.mse_before,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - tp).count());
+      methods.push_back(label);
+      probes.push_back(std::move(p));
+    }
+    td.nearest_joints = 0;  // the evaluation's own samples: the bone columns (models re-column from raw)
   }
   const std::size_t K = methods.size();
   if (!map_dir.empty()) fs::create_directories(map_dir);
@@ -266,7 +282,15 @@ int gat::eval_motion(const EvalMotionArgs& args) {
           sn.features = displacement_model_features(td, raw, m.nearest);
           preds.push_back(predict(*m.l.model, sn, m.l.norm));
         }
-        if (linear_probe) preds.push_back(predict_linear(probe, s, probe_norm));
+        for (const Probe& p : probes) {
+          if (p.nearest == 0) {
+            preds.push_back(predict_linear(p.map, s, p.norm));
+            continue;
+          }
+          Sample sn = s;
+          sn.features = displacement_model_features(td, raw, p.nearest);
+          preds.push_back(predict_linear(p.map, sn, p.norm));
+        }
         // The target is in the root frame; the reference in the world's.
         // (Model errors are differences of two root-frame offsets: the same
         // length in either frame.)
