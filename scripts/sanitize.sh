@@ -33,7 +33,7 @@ if [[ "$mode" != "--fuzz-only" ]]; then
   # rebuilds a project against the package; nothing sanitizer-specific).
   # Also left to the Release suite: the end-to-end runs that train models for
   # many steps (the experiments, gat demo / train on datasets, the MPI runs,
-  # Blender's import): the same library code as the unit tests, at training
+  # Blender's import, the nearest-joint and progress-line CLI runs): the same library code as the unit tests, at training
   # sizes, which under ASan + libFuzzer coverage take 10-30 times as long and
   # would push CI past its time. Every loader, writer and kernel still runs
   # here through the unit tests, the CLI bad-input tests and the fuzz replays.
@@ -41,7 +41,7 @@ if [[ "$mode" != "--fuzz-only" ]]; then
   # which other tests need, must stay: ctest does
   # not add an excluded set-up back, and the tests that need it would fail.)
   ctest --test-dir "$build" --output-on-failure -j2 \
-    -E '_(lp128|lp256|lp512|staging|smallbind.*)$|^downstream_find_package$|^experiment_|_experiment_tiny$|^dist_train_|^gat_demo|^gat_train_(data_neuroskinning|eval_.*|loss|interrupt|vulkan)$|^gat_skinweights_any$|^gat_blender_import$|^runtime_deform_clip$|^gat_distill$'
+    -E '_(lp128|lp256|lp512|staging|smallbind.*)$|^downstream_find_package$|^experiment_|_experiment_tiny$|^dist_train_|^gat_demo|^gat_train_(data_neuroskinning|eval_.*|loss|interrupt|vulkan)$|^gat_skinweights_any$|^gat_blender_import$|^runtime_deform_clip$|^gat_distill$|^gat_joint_columns_nearest$|^gat_progress_tty$'
 fi
 
 # Each fuzzer for a bounded time on a scratch copy of its corpus (new inputs
