@@ -11,6 +11,7 @@
 #include <random>
 
 #include "character_fixtures.hpp"
+#include "pose_fixtures.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/features/features.hpp"
 #include "gatcore/character/features/nearest_joints.hpp"
@@ -101,15 +102,6 @@ std::string nearest_checkpoint(int K) {
   return path;
 }
 
-Pose turned(const Skeleton& s, int seed) {
-  Pose p = bind_pose(s);
-  for (std::size_t j = 0; j < p.local.size(); ++j) {
-    const float a = 0.4f * std::sin(float(seed * 5 + int(j) * 3));
-    p.local[j].rotation = quat_normalize(quat_mul(p.local[j].rotation, quat_from_axis_angle({0.2f, 1.f, 0.4f}, a)));
-  }
-  return p;
-}
-
 }  // namespace
 
 TEST_CASE("a nearest-joint corrective model deforms any skeleton, whatever its joints are called", "[nearest_joints]") {
@@ -133,7 +125,7 @@ TEST_CASE("a nearest-joint corrective model deforms any skeleton, whatever its j
   const std::size_t n3 = std::size_t(3 * rt.num_vertices());
   std::vector<float> out(n3);
   for (int f = 0; f < 3; ++f) {
-    const Pose pose = turned(a.skeleton, f);
+    const Pose pose = posefix::test_pose(a.skeleton, f);
     const CorrectedFrame fa = deform_frame(da, *lm.model, lm.norm, pose);
     const CorrectedFrame fb = deform_frame(db, *lm.model, lm.norm, pose);
     CHECK(fa.corrected == fb.corrected);  // names change nothing
@@ -141,9 +133,7 @@ TEST_CASE("a nearest-joint corrective model deforms any skeleton, whatever its j
     for (std::size_t i = 0; i < fa.corrected.size(); ++i) corr = std::max(corr, std::abs(fa.corrected[i] - fa.lbs[i]));
     CHECK(corr > 0.f);  // a real correction was compared
     // The runtime computes the same columns (one row function).
-    std::vector<float> globals;
-    for (const Mat4& m : global_transforms(b.skeleton, pose)) globals.insert(globals.end(), m.begin(), m.end());
-    rt.deform(globals, out);
+    rt.deform(posefix::globals_of(b.skeleton, pose), out);
     CHECK(out == fb.corrected);
   }
 
@@ -152,6 +142,6 @@ TEST_CASE("a nearest-joint corrective model deforms any skeleton, whatever its j
   const Character c = charfix::tube_character(8, 8, 2.0f, 0.25f, 0.3f);
   REQUIRE(c.skeleton.num_joints() < 4);
   const CorrectiveDeformer dc = make_corrective_deformer(c, bones, {}, scales, 4);
-  const CorrectedFrame fc = deform_frame(dc, *lm.model, lm.norm, turned(c.skeleton, 1));
+  const CorrectedFrame fc = deform_frame(dc, *lm.model, lm.norm, posefix::test_pose(c.skeleton, 1));
   for (float x : fc.corrected) REQUIRE(std::isfinite(x));
 }

@@ -23,6 +23,7 @@
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/gatcore.h"
 #include "gatcore/runtime.hpp"
+#include "pose_fixtures.hpp"
 #include "vulkan_test_util.hpp"
 
 // ---- Counting allocator: every malloc-family call of the process goes
@@ -165,25 +166,8 @@ std::string corrective_checkpoint(const std::string& name, const std::vector<std
   return path;
 }
 
-// A pose away from the bind pose: every joint turned, the root moved and turned
-// (the root-frame path), seeded.
-Pose test_pose(const Skeleton& s, int seed) {
-  Pose p = bind_pose(s);
-  for (std::size_t j = 0; j < p.local.size(); ++j) {
-    const float a = 0.3f * std::sin(float(seed * 7 + int(j) * 3));
-    p.local[j].rotation = quat_normalize(quat_mul(p.local[j].rotation, quat_from_axis_angle({0.3f, 1.f, 0.2f}, a)));
-  }
-  p.local[0].translation[0] += 0.2f * float(seed);
-  p.local[0].translation[2] -= 0.1f * float(seed);
-  return p;
-}
-
-std::vector<float> globals_of(const Skeleton& s, const Pose& p) {
-  const std::vector<Mat4> g = global_transforms(s, p);
-  std::vector<float> out;
-  for (const Mat4& m : g) out.insert(out.end(), m.begin(), m.end());
-  return out;
-}
+using posefix::globals_of;
+using posefix::test_pose;
 
 }  // namespace
 
