@@ -181,8 +181,10 @@ void print_model(const std::string& path) {
   std::printf("\n");
   if (l.file.metadata.count("skeleton")) {
     const std::string& sk = l.file.metadata.at("skeleton");
-    std::printf("bones      %lld (%s%s)\n", static_cast<long long>(std::count(sk.begin(), sk.end(), ',') + (sk.empty() ? 0 : 1)),
-                sk.substr(0, 60).c_str(), sk.size() > 60 ? ", ..." : "");
+    const bool nearest = metadata(l.file, "joint_columns", "").rfind("nearest:", 0) == 0;
+    std::printf("bones      %lld (%s%s)%s\n", static_cast<long long>(std::count(sk.begin(), sk.end(), ',') + (sk.empty() ? 0 : 1)),
+                sk.substr(0, 60).c_str(), sk.size() > 60 ? ", ..." : "",
+                nearest ? ": the training data's skeleton, not matched (nearest-joint columns)" : "");
   }
   if (l.file.metadata.count("loss_history")) {
     const auto h = parse_history(l.file.metadata.at("loss_history"), path);
