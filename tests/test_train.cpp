@@ -2,6 +2,8 @@
 // graphs, schedules, determinism.
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 #include <set>
 
 #include <omp.h>
@@ -148,4 +150,29 @@ TEST_CASE("training is deterministic given a seed") {
     omp_set_num_threads(nt);
     CHECK(a == e);
   }
+}
+
+TEST_CASE("Normaliser: z-scores, and a column constant in training stays at its training value") {
+  // Column 1 is 0 in every training row (the distance column of a bone no
+  // training character has): a new character that fills it must not feed
+  // the untrained weights behind it.
+  Sample s;
+  s.features = Tensor::empty(4, 3);
+  for (std::int64_t i = 0; i < 4; ++i) {
+    s.features.at(i, 0) = float(i);  // mean 1.5, std sqrt(1.25)
+    s.features.at(i, 1) = 0.f;
+    s.features.at(i, 2) = 2.f;
+  }
+  s.target = Tensor::zeros(4, 3);
+  const Normaliser n = Normaliser::fit({s}, false);
+  CHECK(n.mean.at(0, 0) == Approx(1.5));
+  CHECK(n.inv_std.at(0, 0) == Approx(1.0 / std::sqrt(1.25)));
+  CHECK(n.inv_std.at(0, 1) == 0.f);
+  CHECK(n.inv_std.at(0, 2) == 0.f);
+  Tensor x = Tensor::empty(1, 3);
+  x.at(0, 0) = 3.f, x.at(0, 1) = 0.7f, x.at(0, 2) = 5.f;
+  const Tensor y = n.apply(x);
+  CHECK(y.at(0, 0) == Approx(1.5 / std::sqrt(1.25)));
+  CHECK(y.at(0, 1) == 0.f);  // held at the training value, whatever the new character puts there
+  CHECK(y.at(0, 2) == 0.f);
 }

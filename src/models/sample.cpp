@@ -30,7 +30,7 @@ Normaliser Normaliser::fit(const std::vector<Sample>& samples, bool scale_target
   for (std::int64_t j = 0; j < d; ++j) {
     const double m = s[j] / count, var = std::max(0.0, ss[j] / count - m * m);
     n.mean.at(0, j) = float(m);
-    n.inv_std.at(0, j) = var > 1e-12 ? float(1.0 / std::sqrt(var)) : 1.f;
+    n.inv_std.at(0, j) = var > 1e-12 ? float(1.0 / std::sqrt(var)) : 0.f;  // constant in training: held there
   }
   if (scale_targets && tss > 0) n.target_scale = float(1.0 / std::sqrt(tss / tcount));
   return n;

@@ -23,7 +23,12 @@ struct Sample {
 };
 
 // Per-column feature normalisation (z-score) and a scalar target scale for
-// displacements; stored in checkpoints with the model.
+// displacements; stored in checkpoints with the model. A column that was
+// constant over the training data gets inv_std 0: the model never saw it
+// vary, so at inference it stays at its training value (e.g. the distance
+// column of a bone no training character has, filled by a new character's
+// skeleton: passing it through unscaled fed untrained weights, 2.2 x LBS's
+// error on a new skeleton in docs/RESULTS.md).
 struct Normaliser {
   Tensor mean, inv_std;     // [1, d]
   float target_scale = 1.f; // targets are multiplied by it for training; predictions divided
