@@ -27,8 +27,7 @@ struct Sample {
 // constant over the training data gets inv_std 0: the model never saw it
 // vary, so at inference it stays at its training value (e.g. the distance
 // column of a bone no training character has, filled by a new character's
-// skeleton: passing it through unscaled fed untrained weights, 2.2 x LBS's
-// error on a new skeleton in docs/RESULTS.md).
+// skeleton, would otherwise feed weights no gradient ever reached).
 struct Normaliser {
   Tensor mean, inv_std;     // [1, d]
   float target_scale = 1.f; // targets are multiplied by it for training; predictions divided
