@@ -1,14 +1,25 @@
 #pragma once
-// Seeded test poses for the deformer tests (test_runtime,
-// test_character_nearest_joints): every joint turned, the root moved and
-// turned (so the root-frame path of the features is exercised), and the
-// joints' global matrices packed as the runtime takes them.
+// What the deformer tests (test_runtime, test_character_nearest_joints)
+// deform: a small procedural humanoid, seeded test poses (every joint
+// turned, the root moved and turned, so the root-frame path of the features
+// is exercised), and the joints' global matrices packed as the runtime takes
+// them.
 #include <cmath>
 #include <vector>
 
+#include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/rig/motion.hpp"
 
 namespace posefix {
+
+// About 2.5k vertices, 19 joints.
+inline gatcore::character::Character humanoid(std::uint32_t seed) {
+  gatcore::character::ProceduralOptions o;
+  o.seed = seed;
+  o.ring_segments = 8;
+  o.rings_per_bone = 3;
+  return gatcore::character::procedural_character(o);
+}
 
 inline gatcore::character::Pose test_pose(const gatcore::character::Skeleton& s, int seed) {
   using namespace gatcore::character;

@@ -71,13 +71,7 @@ TEST_CASE("joint column layouts round-trip through text; bad ones are named", "[
 
 namespace {
 
-Character humanoid(std::uint32_t seed) {
-  ProceduralOptions o;
-  o.seed = seed;
-  o.ring_segments = 8;
-  o.rings_per_bone = 3;
-  return procedural_character(o);
-}
+using posefix::humanoid;
 
 // An untrained DenseGATs checkpoint with nearest:K joint columns and
 // distortion columns at scales 1,4, trained (by its metadata) on bones no

@@ -122,14 +122,6 @@ std::string tmp(const std::string& name) {
   return (dir / name).string();
 }
 
-Character humanoid(std::uint32_t seed) {
-  ProceduralOptions o;
-  o.seed = seed;
-  o.ring_segments = 8;
-  o.rings_per_bone = 3;
-  return procedural_character(o);
-}
-
 std::vector<std::string> bone_names(const Skeleton& s) {
   std::vector<std::string> b;
   for (const auto& n : s.names) b.push_back(normalise_bone_name(n));
@@ -167,6 +159,7 @@ std::string corrective_checkpoint(const std::string& name, const std::vector<std
 }
 
 using posefix::globals_of;
+using posefix::humanoid;
 using posefix::test_pose;
 
 }  // namespace

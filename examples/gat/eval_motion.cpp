@@ -273,24 +273,17 @@ int gat::eval_motion(const EvalMotionArgs& args) {
         const std::vector<float> dqs = apply_normalisation(pc.norm, dual_quaternion_skinning(pc.character.mesh, S));
         std::vector<std::vector<float>> err(K, std::vector<float>(std::size_t(n)));
         std::vector<Tensor> preds;
-        for (auto& m : models_) {
-          if (m.nearest == 0) {
-            preds.push_back(predict(*m.l.model, s, m.l.norm));
-            continue;
-          }
-          Sample sn = s;  // the same frame, this model's joint columns
-          sn.features = displacement_model_features(td, raw, m.nearest);
-          preds.push_back(predict(*m.l.model, sn, m.l.norm));
-        }
-        for (const Probe& p : probes) {
-          if (p.nearest == 0) {
-            preds.push_back(predict_linear(p.map, s, p.norm));
-            continue;
-          }
-          Sample sn = s;
-          sn.features = displacement_model_features(td, raw, p.nearest);
-          preds.push_back(predict_linear(p.map, sn, p.norm));
-        }
+        // The frame's input per joint-column layout, each made once (models
+        // and probes of one layout share it; bone columns are `s` itself).
+        std::map<int, Sample> by_layout;
+        const auto input = [&](int nearest) -> const Sample& {
+          if (nearest == 0) return s;
+          auto [it, fresh] = by_layout.try_emplace(nearest, s);
+          if (fresh) it->second.features = displacement_model_features(td, raw, nearest);
+          return it->second;
+        };
+        for (auto& m : models_) preds.push_back(predict(*m.l.model, input(m.nearest), m.l.norm));
+        for (const Probe& p : probes) preds.push_back(predict_linear(p.map, input(p.nearest), p.norm));
         // The target is in the root frame; the reference in the world's.
         // (Model errors are differences of two root-frame offsets: the same
         // length in either frame.)
