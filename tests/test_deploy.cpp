@@ -1,7 +1,8 @@
 // The deploy-time model path (models/deploy.hpp): DeployPlan::run gives
 // bitwise models::predict's values on the folded model, for every
-// displacement model with a deploy path, with and without BatchNorm, and
-// refuses models without one.
+// displacement model with a deploy path, with and without BatchNorm and the
+// linear skip (the runtime once dropped the skip silently), and refuses models
+// without one.
 #include <catch2/catch.hpp>
 
 #include "gatcore/models/deploy.hpp"
@@ -40,10 +41,11 @@ ModelConfig small(const std::string& name) {
 TEST_CASE("DeployPlan::run equals models::predict bitwise for every deployable model") {
   const std::vector<Sample> data = {fixtures::wave_sample(9, 7, 0.f), fixtures::wave_sample(9, 7, 0.6f)};
   for (const char* name : {"densegats", "densegats-noself", "densegats-nodense", "origat"}) {
-    for (const bool bn : {true, false}) {
-      INFO("model " << name << ", batch_norm " << bn);
+    for (const bool bn : {true, false}) for (const bool skip : {false, true}) {
+      INFO("model " << name << ", batch_norm " << bn << ", linear_skip " << skip);
       ModelConfig cfg = small(name);
       cfg.batch_norm = bn;
+      cfg.linear_skip = skip;
       Normaliser norm;
       auto m = trained(cfg, data, norm);
       m->fold_batch_norm();

@@ -138,12 +138,22 @@ std::string joined(const std::vector<std::string>& v) {
 // A fresh (untrained) displacement checkpoint on the humanoid's bones with
 // distortion columns at `scales`; BatchNorm statistics perturbed so folding
 // is not an identity. The plumbing, not the quality, is under test.
+// With `skip` the model has the linear skip, and the skip and the network's
+// last layer (zero at initialisation) get values, so both parts move the mesh.
 std::string corrective_checkpoint(const std::string& name, const std::vector<std::string>& bones,
-                                  const std::string& scales, int n_scales) {
+                                  const std::string& scales, int n_scales, bool skip = false) {
   models::ModelConfig cfg = models::ModelConfig::defaults(name, 6 + std::int64_t(bones.size()) + 3 * n_scales, 3);
   cfg.modules = 2, cfg.blocks = 2, cfg.head = {32}, cfg.gat_layers = 3;
+  cfg.linear_skip = skip;
   auto m = models::make_model(cfg, 7);
   std::uint32_t k = 1;
+  if (skip)
+    for (auto& p : m->registry().params) {
+      Tensor t = p.var.value();  // a handle: writes reach the parameter
+      if (p.name.rfind("skip.", 0) != 0 && t.to_vector() != std::vector<float>(std::size_t(t.numel()), 0.f)) continue;
+      for (std::int64_t i = 0; i < t.rows(); ++i)
+        for (std::int64_t c = 0; c < t.cols(); ++c) t.at(i, c) = 0.02f * float(int((k++ * 29) % 9) - 4);
+    }
   for (auto& b : m->registry().buffers)
     for (std::int64_t c = 0; c < b.tensor.cols(); ++c)
       b.tensor.at(0, c) = (b.name.find("var") != std::string::npos ? 0.5f : 0.f) + 0.1f * float((k++ * 37) % 11);
@@ -152,7 +162,7 @@ std::string corrective_checkpoint(const std::string& name, const std::vector<std
   norm.inv_std = Tensor::full(1, cfg.in_dim, 2.f);
   for (std::int64_t c = 0; c < cfg.in_dim; ++c) norm.mean.at(0, c) = 0.01f * float(c % 5);
   norm.target_scale = 4.f;
-  const std::string path = tmp(name + "_" + std::to_string(n_scales) + ".gcm");
+  const std::string path = tmp(name + "_" + std::to_string(n_scales) + (skip ? "_skip" : "") + ".gcm");
   models::save_checkpoint(path, *m, norm, nullptr,
                           {{"features", "densegats"}, {"skeleton", joined(bones)}, {"distortion_scales", scales}});
   return path;
@@ -167,10 +177,12 @@ using posefix::test_pose;
 TEST_CASE("runtime::Deformer gives gat deform's numbers bitwise", "[runtime]") {
   const Character ch = humanoid(3);
   const std::vector<std::string> bones = bone_names(ch.skeleton);
-  for (const auto& [name, scales, ns] : {std::tuple{"densegats", "1,4", 2}, std::tuple{"densegats", "none", 0},
-                                         std::tuple{"origat", "2", 1}, std::tuple{"densegats-nodense", "1", 1}}) {
-    INFO("model " << name << " distortion scales " << scales);
-    const std::string path = corrective_checkpoint(name, bones, scales, ns);
+  for (const auto& [name, scales, ns, skip] :
+       {std::tuple{"densegats", "1,4", 2, false}, std::tuple{"densegats", "none", 0, false},
+        std::tuple{"origat", "2", 1, false}, std::tuple{"densegats-nodense", "1", 1, false},
+        std::tuple{"densegats", "1,4", 2, true}, std::tuple{"origat", "1,4", 2, true}}) {
+    INFO("model " << name << " distortion scales " << scales << " linear skip " << skip);
+    const std::string path = corrective_checkpoint(name, bones, scales, ns, skip);
     // gat deform's path.
     models::LoadedModel lm = models::load_checkpoint(path);
     lm.model->fold_batch_norm();

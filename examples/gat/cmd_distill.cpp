@@ -25,6 +25,7 @@
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/distill.hpp"
+#include "gatcore/models/linear_skip.hpp"
 #include "gatcore/models/train.hpp"
 #include "progress.hpp"
 
@@ -39,6 +40,7 @@ struct DistillArgs {
   std::string teacher_path, student_name = "origat", out = "student.gcm", data;
   long epochs = 10, seed = 0, samples = 0;
   double minutes = 0, hard = 0, lr = 1e-3;
+  bool linear_skip = false;
   CommonOptions common;
 };
 
@@ -77,6 +79,7 @@ int run_distill(const DistillArgs& a) {
   GATCORE_CHECK(cfg.task == Task::displacement, "--model ", student_name, " predicts skin weights; the student must ",
                 "predict displacements (densegats, densegats-noself, densegats-nodense, origat)");
   cfg.loss = teacher.model->config().loss;
+  cfg.linear_skip = a.linear_skip;
   auto student = make_model(cfg, std::uint64_t(seed));
 
   const bool quiet = a.common.quiet;
@@ -95,6 +98,15 @@ int run_distill(const DistillArgs& a) {
   const std::vector<Sample> val = part(character::DatasetPart::validation, 0);
   GATCORE_CHECK(!train.empty(), data, ": no training samples");
   const Normaliser norm = Normaliser::fit(train, true);
+  if (cfg.linear_skip) {
+    // Fitted to the teacher's answers (the samples' targets by now), so the
+    // student starts at the best linear imitation of its teacher.
+    const LinearMap f = fit_linear_skip(*student, train, norm);
+    if (!quiet)
+      std::printf("linear skip: least-squares fit of the teacher on %lld training vertices, MSE %.6f (predicting "
+                  "zero: %.6f)\n",
+                  static_cast<long long>(f.rows), f.mse_after, f.mse_before);
+  }
   TrainOptions opt = TrainOptions::defaults_for(cfg);
   opt.seed = std::uint64_t(seed);
   opt.lr = float(lr);
@@ -170,6 +182,10 @@ Runner setup_distill(CLI::App& gat) {
       ->check(number_in(0, 1))->capture_default_str();
   c.add_option("--samples", a->samples, "poses per character and epoch (default: all of the dataset's)")
       ->check(int_in(1, 1000000));
+  c.add_flag("--linear-skip", a->linear_skip,
+             "give the student a per-vertex linear map of its inputs added to its output, fitted by least squares "
+             "to the teacher's predictions before the first epoch (the small network learns the rest; see gat "
+             "train --linear-skip)");
   c.add_option("--lr", a->lr, "initial learning rate")->check(number_in(1e-12, 10))->capture_default_str();
   add_seed(c, a->seed, "the student's initialisation and the samples");
   add_threads(c, a->common);

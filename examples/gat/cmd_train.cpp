@@ -90,7 +90,7 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "closer to the mean vertex error gat eval reports)")
       ->check(one_of({"mse", "l1"}));
   c.add_flag("--linear-skip", a->linear_skip,
-             "densegats family: add a per-vertex linear map of the input columns to the output, set to the "
+             "displacement models (densegats family, origat): add a per-vertex linear map of the input columns to the output, set to the "
              "least-squares fit of the training targets before the first epoch (the graph network learns the "
              "residual; recorded in the checkpoint's configuration; not the paper's architecture)");
   c.add_option("--joint-columns", a->joint_columns,
@@ -239,8 +239,8 @@ int run_train(TrainArgs a) {
       cfg.loss = loss == "l1" ? DisplacementLoss::l1 : DisplacementLoss::mse;
     }
     if (linear_skip) {
-      if (cfg.name.rfind("densegats", 0) != 0 || cfg.task != Task::displacement) {
-        std::fprintf(stderr, "gat train: --linear-skip applies to the densegats family's displacement task, not %s\n",
+      if ((cfg.name.rfind("densegats", 0) != 0 && cfg.name != "origat") || cfg.task != Task::displacement) {
+        std::fprintf(stderr, "gat train: --linear-skip applies to displacement models (the densegats family, origat), not %s\n",
                      cfg.name.c_str());
         return 2;
       }

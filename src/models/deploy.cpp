@@ -69,6 +69,11 @@ struct DeployModel {
   bool dense = true;
   // origat
   std::vector<OriLayer> layers;
+  // config.linear_skip (either family): x W + b on the normalised input, added
+  // to the network's output. Always fp32: it carries most of the correction
+  // (the least-squares part) and costs a [n x in] x [in x 3] product.
+  bool has_skip = false;
+  DenseStep skip;
 };
 
 namespace {
@@ -188,6 +193,10 @@ std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normali
   }
   model.fold_batch_norm();
   Loader L(model, device, d->params);
+  if (c.linear_skip) {
+    d->has_skip = true;
+    d->skip = dense_step(L, "skip.", Activation::identity, 0.f, device, Precision::fp32);
+  }
   if (c.name == "origat") {
     d->origat = true;
     for (int l = 0; l < c.gat_layers; ++l) {
@@ -254,6 +263,7 @@ struct DeployPlan::Buffers {
   Tensor zs;  // CPU: [z | self] from the one product of a GAT block
   std::vector<Shadow> mod_bf16;  // CPU bf16: one per B.mod (empty when not used)
   std::vector<Tensor> o_z, o_y, o_act, o_el, o_er, o_alpha;  // origat, per layer
+  Tensor skip_lin, skip_out;  // config.linear_skip: x W + b, and the network's output plus it
 };
 
 DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
@@ -311,6 +321,10 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
       B.h_lin.push_back(be.empty(n_, M.head[k].W.cols()));
       B.h_act.push_back(M.head[k].act != Activation::identity ? be.empty(n_, M.head[k].W.cols()) : Tensor{});
     }
+  }
+  if (M.has_skip) {
+    B.skip_lin = be.empty(n_, M.cfg.out_dim);
+    B.skip_out = be.empty(n_, M.cfg.out_dim);
   }
   y_host_ = Tensor::empty(n_, M.cfg.out_dim);
 }
@@ -464,6 +478,11 @@ const Tensor& DeployPlan::run() {
       y = M.head[k].act != Activation::identity ? B.h_act[k] : B.h_lin[k];
     }
     out = y;
+  }
+  if (M.has_skip) {  // densegats.cpp / origat.cpp: add(network, skip.forward(x)), add = axpby(1, a, 1, b)
+    dense_step(be, M.skip, B.x, B.skip_lin, Tensor{});
+    be.axpby(1.0f, out, 1.0f, B.skip_lin, B.skip_out);
+    out = B.skip_out;
   }
   if (M.device == Device::cpu) {
     y_host_.copy_from_(out);

@@ -2,7 +2,12 @@
 // K heads × F concatenated, LeakyReLU(0.2) logits; hidden layers use
 // LeakyReLU(0.01) (stand-in for the original ELU, which gatcore lacks); the
 // last layer is one head of width out_dim with no activation.
-// Parameters: layers.l.{W, att_dst, att_src, b}.
+// Parameters: layers.l.{W, att_dst, att_src, b}; with config.linear_skip also
+// skip.{W, b}: a Linear in -> out on the input columns added to the output
+// (as in densegats.cpp), the last layer's W starting at zero so the untrained
+// model is the skip alone (models/linear_skip.hpp fits it before training).
+// That makes a small deploy model (gat distill) start from the least-squares
+// part of the correction and spend its few parameters on the rest.
 #include <cmath>
 
 #include "gatcore/backend.hpp"
@@ -34,6 +39,12 @@ class OriGat final : public Model {
       layers_.push_back(L);
       w = std::int64_t(H) * F;
     }
+    if (c.linear_skip) {
+      GATCORE_CHECK(c.task == Task::displacement, "origat: linear_skip needs the displacement task");
+      skip_ = nn::Linear(root.sub("skip"), c.in_dim, c.out_dim, init, nn::Init::zeros, true);
+      // dL/dW of the last layer is its input^T (A^T dL/dy), not zero: it leaves zero on the first step.
+      layers_.back().W.value().zero_();
+    }
   }
 
   Var forward(const Batch& b, bool) override {
@@ -44,6 +55,7 @@ class OriGat final : public Model {
       y = add_bias(z, L.b);
       if (l + 1 < layers_.size()) y = leaky_relu(y, 0.01f);
     }
+    if (cfg_.linear_skip) y = add(y, skip_.forward(Var(b.x)));
     return output(y, b);
   }
 
@@ -60,6 +72,7 @@ class OriGat final : public Model {
     return add(z, matmul(Var(ones), b));
   }
   std::vector<Layer> layers_;
+  nn::Linear skip_;  // config.linear_skip
 };
 
 }  // namespace

@@ -31,9 +31,9 @@ struct ModelConfig {
   float beta = 0.125f;  // self-reinforced stream width / (K·F); 0 = densegats-noself
   bool dense = true;    // false = densegats-nodense
   std::vector<std::int64_t> head{512, 128};
-  // Linear skip (DenseGATs family, displacement task): output = head(...) +
-  // x·S + s, a per-vertex linear map of the (normalised) input columns, and
-  // the head's last layer starts at zero, so the untrained network is exactly
+  // Linear skip (DenseGATs family and Ori.GAT, displacement task): output =
+  // network(...) + x·S + s, a per-vertex linear map of the (normalised) input
+  // columns, and the network's last layer starts at zero, so the untrained network is exactly
   // the skip (models/linear_skip.hpp fits it by least squares before
   // training). Not the paper's architecture; off by default, and configs
   // written before the key existed read as off.
