@@ -91,6 +91,13 @@ int run(const DeformArgs& a) {
               lm.model->config().name.c_str(), model_path.c_str(), in.c_str(),
               static_cast<long long>(ch.mesh.num_vertices()), joints.c_str(), motion_path.c_str(), first, last - 1,
               double(clip.fps), device_label(dev).c_str());
+  if (nearest == 0) {
+    const BonePresence presence = checkpoint_bone_presence(lm.file, model_path, bones.size());
+    const std::string w = unseen_absent_bones_warning(in, unseen_absent_bones(d.mapping, bones, presence), presence);
+    if (!w.empty())
+      std::fprintf(stderr, "gat deform: %s, or use a model trained with --joint-columns nearest:K (any skeleton).\n",
+                   w.c_str());
+  }
   BakedFrames baked;
   baked.fps = clip.fps;
   double sum_f = 0, sum_i = 0, sum_t = 0, sum_corr = 0, max_corr = 0;

@@ -123,6 +123,8 @@ int run_distill(const DistillArgs& a) {
                                            {"joint_columns", character::format_joint_columns(td.nearest_joints)},
                                            {"distilled_from", std::filesystem::absolute(teacher_path).string()},
                                            {"distill_hard", std::to_string(hard)}};
+  for (const char* k : {"bone_presence", "training_characters"})  // the teacher's training set, the student's too
+    if (md.count(k)) extra[k] = md.at(k);
   if (!quiet)
     std::printf("gat distill: %s (%lld parameters) imitating %s (%s, %lld parameters) on %s: %zu training / %zu "
               "validation samples, ground-truth weight %g, %d threads\n",

@@ -329,6 +329,17 @@ int run_train(TrainArgs a) {
     extra["data_path"] = std::filesystem::absolute(data).string();
     extra["data_hash"] = td->hash;
     extra["skeleton"] = character::joined_bone_names(td->super);
+    if (!any_skeleton && td->nearest_joints == 0) {
+      // Which bones every training character had: a character lacking one of
+      // them feeds the model an input it never saw (gat deform and
+      // predict-weights warn, character_model.hpp).
+      std::vector<int> presence(std::size_t(td->super.num_bones()), 0);
+      const auto& part = td->part(character::DatasetPart::train);
+      for (std::int32_t c : part)
+        for (std::size_t b = 0; b < presence.size(); ++b) presence[b] += td->super.mask[std::size_t(c)][b] != 0;
+      extra["bone_presence"] = character::format_bone_presence(presence);
+      extra["training_characters"] = std::to_string(part.size());
+    }
     if (cfg.task == Task::displacement) {
       extra["distortion_scales"] = character::format_distortion_scales(td->description.distortion_scales);
       extra["joint_columns"] = character::format_joint_columns(td->nearest_joints);

@@ -1,5 +1,6 @@
 #include "gatcore/character/inference/character_model.hpp"
 
+#include <cmath>
 #include <map>
 #include <sstream>
 
@@ -125,6 +126,68 @@ Tensor features_in_bone_order(const Tensor& f, const BoneMapping& m) {
       if (m.joint_to_bone[j] >= 0) out.at(i, 6 + m.joint_to_bone[j]) = f.at(i, 6 + j);
   }
   return out;
+}
+
+BonePresence checkpoint_bone_presence(const models::CheckpointFile& f, const std::string& path,
+                                      std::size_t num_bones) {
+  BonePresence p;
+  const auto& md = f.metadata;
+  const auto c = md.find("bone_presence"), n = md.find("training_characters");
+  if (c == md.end() && n == md.end()) return p;
+  GATCORE_CHECK(c != md.end() && n != md.end(), path, ": metadata 'bone_presence' and 'training_characters' go together");
+  const auto num = [&](const std::string& field, const std::string& v) {
+    std::size_t end = 0;
+    long x = -1;
+    try {
+      x = std::stol(v, &end);
+    } catch (const std::exception&) {
+      end = 0;
+    }
+    GATCORE_CHECK(end == v.size() && !v.empty() && x >= 0 && x <= 100000000, path, ": metadata '", field,
+                  "': bad count '", v, "'");
+    return int(x);
+  };
+  p.characters = num("training_characters", n->second);
+  std::stringstream ss(c->second);
+  for (std::string item; std::getline(ss, item, ',');) {
+    p.count.push_back(num("bone_presence", item));
+    GATCORE_CHECK(p.count.back() <= p.characters, path, ": metadata 'bone_presence': ", p.count.back(),
+                  " characters of ", p.characters);
+  }
+  GATCORE_CHECK(p.count.size() == num_bones, path, ": metadata 'bone_presence' has ", p.count.size(), " counts for ",
+                num_bones, " bones");
+  return p;
+}
+
+std::string format_bone_presence(const std::vector<int>& count) {
+  std::string s;
+  for (std::size_t i = 0; i < count.size(); ++i) s += (i ? "," : "") + std::to_string(count[i]);
+  return s;
+}
+
+std::vector<std::string> unseen_absent_bones(const BoneMapping& m, const std::vector<std::string>& bones,
+                                             const BonePresence& presence) {
+  std::vector<std::string> out;
+  if (presence.count.empty() || presence.characters == 0) return out;
+  GATCORE_CHECK(bones.size() == m.bone_to_joint.size() && presence.count.size() == bones.size(),
+                "unseen_absent_bones: ", bones.size(), " bone names, a mapping of ", m.bone_to_joint.size(),
+                " bones, ", presence.count.size(), " presence counts");
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    if (m.bone_to_joint[b] < 0 && presence.count[b] == presence.characters) out.push_back(bones[b]);
+  return out;
+}
+
+std::string unseen_absent_bones_warning(const std::string& what, const std::vector<std::string>& absent,
+                                        const BonePresence& presence) {
+  if (absent.empty()) return "";
+  std::string names;
+  for (std::size_t i = 0; i < absent.size() && i < 8; ++i) names += (i ? ", " : "") + absent[i];
+  if (absent.size() > 8) names += ", ...";
+  return "warning: " + what + " lacks " + std::to_string(absent.size()) + " of the model's " +
+         std::to_string(presence.count.size()) + " bones that all " + std::to_string(presence.characters) +
+         " training characters had (" + names +
+         "): their columns read 'absent', an input this model never saw, which can spoil its output on the whole "
+         "mesh. Name the matching joints with --alias JOINT=BONE";
 }
 
 }  // namespace gatcore::character

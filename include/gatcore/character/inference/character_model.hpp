@@ -55,4 +55,31 @@ BoneMapping map_bones(const Skeleton& s, const std::vector<std::string>& bones, 
 // model's bone order (bones the character lacks: 0), as in training.
 Tensor features_in_bone_order(const Tensor& f, const BoneMapping& m);
 
+// How many of a model's training characters had each of its bones
+// (checkpoint metadata "bone_presence": counts in "skeleton" order, and
+// "training_characters"). Written by gat train for bone-column models.
+struct BonePresence {
+  std::vector<int> count;  // [bones]; empty: not recorded (older checkpoints)
+  int characters = 0;
+};
+// Reads it; empty when the keys are absent. Throws InvalidArgument naming
+// `path` when they are malformed or their length is not num_bones.
+BonePresence checkpoint_bone_presence(const models::CheckpointFile& f, const std::string& path,
+                                      std::size_t num_bones);
+// The metadata value: the counts joined by commas.
+std::string format_bone_presence(const std::vector<int>& count);
+
+// The model's bones this character lacks although every training character
+// had them: their columns read 0 ("absent"), an input the model never saw in
+// training. In docs/RESULTS.md four finger bones per hand named differently
+// made a bone-column DenseGATs 2.2 times worse than LBS over the whole body.
+// Empty when the presence is not recorded.
+std::vector<std::string> unseen_absent_bones(const BoneMapping& m, const std::vector<std::string>& bones,
+                                             const BonePresence& presence);
+// A warning for `what` naming up to 8 of those bones, ending in "Name the
+// matching joints with --alias JOINT=BONE" (the caller adds its other
+// remedy), or "" when `absent` is empty.
+std::string unseen_absent_bones_warning(const std::string& what, const std::vector<std::string>& absent,
+                                        const BonePresence& presence);
+
 }  // namespace gatcore::character
