@@ -5,8 +5,9 @@
 //   runtime_deform/<model>/verts:N
 // models: "paper" = DenseGATs with the paper's sizes (3 modules x 6 blocks,
 // 8 heads x 8, head 512-128; ~714k parameters on the real dataset's 56
-// bones), "distilled" = Ori.GAT with its defaults (4 layers, 8 heads x 8;
-// the `gat distill` student). Fresh weights: speed does not depend on them.
+// bones), "distilled" = Ori.GAT with its defaults (4 layers, 8 heads x 8)
+// and the linear skip (the `gat distill --linear-skip` student). Fresh
+// weights: speed does not depend on them.
 // "_bf16": the same with Precision::bf16 products (AVX512_BF16 CPUs; skipped
 // with an error elsewhere).
 // Counters: features_ms / model_ms per frame (Deformer::last_timing), the
@@ -64,6 +65,7 @@ RuntimeCase make_case(const std::string& which, std::int64_t vertices, Precision
   for (const auto& n : c.ch.skeleton.names) bones.push_back(normalise_bone_name(n));
   const std::int64_t in = 6 + std::int64_t(bones.size()) + 3 * 3;  // distortion scales 1,4,16
   models::ModelConfig cfg = models::ModelConfig::defaults(which == "paper" ? "densegats" : "origat", in, 3);
+  cfg.linear_skip = which == "distilled";
   auto m = models::make_model(cfg, 1);
   models::Normaliser norm;
   norm.mean = Tensor::zeros(1, in);
