@@ -77,6 +77,10 @@ int main(void) {
   int32_t nj = 0, mapped = 0;
   EXPECT(gatcore_deformer_info(d, &nv, &nj, &mapped, &params) == GATCORE_OK);
   EXPECT(nv == NV && nj == J && mapped == J && params > 0);
+  int32_t absent = -1;
+  char absent_names[64] = "x";
+  EXPECT(gatcore_deformer_absent_bones(d, &absent, absent_names, sizeof absent_names) == GATCORE_OK);
+  EXPECT(absent == 0 && absent_names[0] == '\0'); /* the fixture records no training bones */
   EXPECT(gatcore_deformer_deform(d, g, J, out, nrm, NV - 1) == GATCORE_ERROR_INVALID_ARGUMENT);
   EXPECT(strstr(gatcore_last_error(), "vertices") != NULL);
   EXPECT(gatcore_deformer_deform(d, g, J + 1, out, nrm, NV) == GATCORE_ERROR_INVALID_ARGUMENT);

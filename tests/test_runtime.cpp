@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <cstring>
 #include <algorithm>
 #include <filesystem>
@@ -141,7 +142,8 @@ std::string joined(const std::vector<std::string>& v) {
 // With `skip` the model has the linear skip, and the skip and the network's
 // last layer (zero at initialisation) get values, so both parts move the mesh.
 std::string corrective_checkpoint(const std::string& name, const std::vector<std::string>& bones,
-                                  const std::string& scales, int n_scales, bool skip = false) {
+                                  const std::string& scales, int n_scales, bool skip = false,
+                                  const std::map<std::string, std::string>& extra_metadata = {}) {
   models::ModelConfig cfg = models::ModelConfig::defaults(name, 6 + std::int64_t(bones.size()) + 3 * n_scales, 3);
   cfg.modules = 2, cfg.blocks = 2, cfg.head = {32}, cfg.gat_layers = 3;
   cfg.linear_skip = skip;
@@ -162,9 +164,11 @@ std::string corrective_checkpoint(const std::string& name, const std::vector<std
   norm.inv_std = Tensor::full(1, cfg.in_dim, 2.f);
   for (std::int64_t c = 0; c < cfg.in_dim; ++c) norm.mean.at(0, c) = 0.01f * float(c % 5);
   norm.target_scale = 4.f;
-  const std::string path = tmp(name + "_" + std::to_string(n_scales) + (skip ? "_skip" : "") + ".gcm");
-  models::save_checkpoint(path, *m, norm, nullptr,
-                          {{"features", "densegats"}, {"skeleton", joined(bones)}, {"distortion_scales", scales}});
+  const std::string path =
+      tmp(name + "_" + std::to_string(n_scales) + (skip ? "_skip" : "") + (extra_metadata.empty() ? "" : "_meta") + ".gcm");
+  std::map<std::string, std::string> md{{"features", "densegats"}, {"skeleton", joined(bones)}, {"distortion_scales", scales}};
+  md.insert(extra_metadata.begin(), extra_metadata.end());
+  models::save_checkpoint(path, *m, norm, nullptr, md);
   return path;
 }
 
@@ -506,6 +510,49 @@ TEST_CASE("the C API gives the C++ runtime's numbers and its errors as codes", "
   CHECK(gatcore_deformer_deform(d, nullptr, J, nullptr, nullptr, n) == GATCORE_ERROR_INVALID_ARGUMENT);
   CHECK_THAT(std::string(gatcore_last_error()), Contains("must not be NULL"));
   gatcore_deformer_destroy(d);
+
+  // Bones every training character had and this one lacks: none recorded, none
+  // reported; recorded, a joint aliased away from its bone is reported.
+  {
+    std::int32_t count = -1;
+    char buf[256] = "x";
+    REQUIRE(gatcore_deformer_load(path.c_str(), GATCORE_DEVICE_CPU, &d) == GATCORE_OK);
+    CHECK(gatcore_deformer_absent_bones(d, &count, buf, sizeof buf) == GATCORE_ERROR_INVALID_ARGUMENT);
+    CHECK_THAT(std::string(gatcore_last_error()), Contains("bind a character first"));
+    REQUIRE(gatcore_deformer_bind(d, &mesh, &sk, nullptr, 0) == GATCORE_OK);
+    REQUIRE(gatcore_deformer_absent_bones(d, &count, buf, sizeof buf) == GATCORE_OK);
+    CHECK(count == 0);
+    CHECK(std::string(buf).empty());
+    gatcore_deformer_destroy(d);
+    std::string presence;
+    // Every training character had every bone but the "tail" (bone_names), which none had.
+    for (std::size_t b = 0; b < bones.size(); ++b) {
+      if (b) presence += ',';
+      presence += bones[b] == "tail" ? '0' : '3';
+    }
+    const std::string lost = normalise_bone_name(s.names.back());  // aliased away below
+    const std::string rec = corrective_checkpoint("densegats", bones, "1,4", 2, false,
+                                                  {{"bone_presence", presence}, {"training_characters", "3"}});
+    REQUIRE(gatcore_deformer_load(rec.c_str(), GATCORE_DEVICE_CPU, &d) == GATCORE_OK);
+    REQUIRE(gatcore_deformer_bind(d, &mesh, &sk, nullptr, 0) == GATCORE_OK);
+    REQUIRE(gatcore_deformer_absent_bones(d, &count, buf, sizeof buf) == GATCORE_OK);
+    CHECK(count == 0);
+    const std::string alias = s.names.back() + "=not_a_bone";
+    const char* aliases[] = {alias.c_str()};
+    REQUIRE(gatcore_deformer_bind(d, &mesh, &sk, aliases, 1) == GATCORE_OK);
+    REQUIRE(gatcore_deformer_absent_bones(d, &count, buf, sizeof buf) == GATCORE_OK);
+    CHECK(count == 1);
+    CHECK(std::string(buf) == lost);
+    CHECK(gatcore_deformer_absent_bones(d, nullptr, buf, 1) == GATCORE_ERROR_INVALID_ARGUMENT);
+    CHECK_THAT(std::string(gatcore_last_error()), Contains("need " + std::to_string(lost.size() + 1) + " bytes"));
+    runtime::Deformer cpp = runtime::Deformer::load(rec);
+    runtime::BindOptions bo;
+    bo.aliases.pairs.emplace_back(normalise_bone_name(s.names.back()), "not_a_bone");
+    cpp.bind(ch.mesh, ch.skeleton, bo);
+    CHECK(cpp.unseen_absent_bones() == std::vector<std::string>{lost});
+    gatcore_deformer_destroy(d);
+    d = nullptr;
+  }
 
   // Precision: FP32 is gatcore_deformer_load; BF16 runs where the CPU has
   // AVX512_BF16 (the C++ runtime's bf16 numbers) and is a device error elsewhere.

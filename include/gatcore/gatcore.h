@@ -37,7 +37,7 @@
 extern "C" {
 #endif
 
-#define GATCORE_C_API_VERSION 2 /* 2: gatcore_precision, gatcore_deformer_load_precision */
+#define GATCORE_C_API_VERSION 3 /* 2: gatcore_precision, gatcore_deformer_load_precision; 3: gatcore_deformer_absent_bones */
 
 typedef enum gatcore_status {
   GATCORE_OK = 0,
@@ -130,6 +130,15 @@ gatcore_status gatcore_deformer_deform(gatcore_deformer* d, const float* joint_g
                                        float* out_positions, float* out_normals, int64_t num_vertices);
 gatcore_status gatcore_deformer_info(const gatcore_deformer* d, int64_t* num_vertices, int32_t* num_joints,
                                      int32_t* mapped_joints, int64_t* parameters);
+/* The model's bones the bound character lacks although every training
+ * character had them: inputs the model never saw, which can spoil the whole
+ * correction (warn the user; bind's aliases can map joints onto them).
+ * *count (may be NULL): how many. names (may be NULL): their names joined by
+ * commas, NUL-terminated, in `capacity` bytes; a buffer too small is
+ * GATCORE_ERROR_INVALID_ARGUMENT naming the size needed. 0 / "" for
+ * nearest-joint models and checkpoints that do not record their training
+ * bones. */
+gatcore_status gatcore_deformer_absent_bones(const gatcore_deformer* d, int32_t* count, char* names, size_t capacity);
 /* Milliseconds of the last deform: features, model, total (any may be NULL). */
 gatcore_status gatcore_deformer_last_timing(const gatcore_deformer* d, double* features_ms, double* model_ms,
                                             double* total_ms);

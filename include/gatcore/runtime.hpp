@@ -104,6 +104,12 @@ class Deformer {
   // Joints of the bound character that matched a model bone (a model with
   // nearest-joint columns uses every joint, whatever its name: all of them).
   std::int32_t mapped_joints() const;
+  // The model's bones the bound character lacks although every training
+  // character had them (character::unseen_absent_bones): inputs the model
+  // never saw, worth a warning to the user (gat deform prints one); bind's
+  // aliases can map joints onto them. Empty for nearest-joint models, for
+  // checkpoints that do not record their training bones, and before bind.
+  std::vector<std::string> unseen_absent_bones() const;
 
  private:
   struct Bound;

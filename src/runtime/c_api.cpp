@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <new>
 #include <string>
 #include <utility>
@@ -271,6 +272,23 @@ gatcore_status gatcore_deformer_info(const gatcore_deformer* d, int64_t* num_ver
   if (num_joints) *num_joints = d->d.num_joints();
   if (mapped_joints) *mapped_joints = d->d.mapped_joints();
   if (parameters) *parameters = d->d.parameter_count();
+  return GATCORE_OK;
+}
+
+gatcore_status gatcore_deformer_absent_bones(const gatcore_deformer* d, int32_t* count, char* names, size_t capacity) {
+  GATCORE_C_REQUIRE(d, "gatcore_deformer_absent_bones: deformer must not be NULL");
+  GATCORE_C_REQUIRE(d->d.bound(), "gatcore_deformer_absent_bones: bind a character first");
+  const std::vector<std::string> absent = d->d.unseen_absent_bones();
+  std::string joined;
+  for (const auto& b : absent) {
+    if (!joined.empty()) joined += ',';
+    joined += b;
+  }
+  GATCORE_C_REQUIRE(!names || capacity > joined.size(), "gatcore_deformer_absent_bones: the names need ",
+                    joined.size() + 1, " bytes, capacity is ", capacity);
+  t_last_error.clear();
+  if (count) *count = int32_t(absent.size());
+  if (names) std::memcpy(names, joined.c_str(), joined.size() + 1);
   return GATCORE_OK;
 }
 

@@ -44,6 +44,7 @@ struct LoadedCorrective {
   std::vector<std::string> bones;
   std::vector<int> scales;
   int nearest = 0;  // > 0: joint columns = each vertex's K nearest joints (any skeleton, no mapping)
+  BonePresence presence;  // bone columns: how many training characters had each bone
   std::string path;
 };
 
@@ -85,6 +86,7 @@ Deformer Deformer::load(const std::string& path, DeviceChoice device, Precision 
   m->bones = character_model_bones(lm, path, models::Task::displacement);
   m->scales = checkpoint_distortion_scales(lm.file, path);
   m->nearest = checkpoint_nearest_joints(lm.file, path);
+  if (m->nearest == 0) m->presence = checkpoint_bone_presence(lm.file, path, m->bones.size());
   GATCORE_CHECK(models::deployable(lm.model->config()), path, ": model '", lm.model->config().name,
                 "' has no runtime path (densegats, densegats-noself, densegats-nodense, origat)");
   m->model = models::make_deploy_model(*lm.model, lm.norm, dev, precision);
@@ -141,6 +143,10 @@ const std::vector<std::string>& Deformer::bones() const { return model_->bones; 
 std::int64_t Deformer::parameter_count() const { return models::deploy_parameter_count(*model_->model); }
 Device Deformer::device() const { return models::deploy_device(*model_->model); }
 Precision Deformer::precision() const { return models::deploy_precision(*model_->model); }
+std::vector<std::string> Deformer::unseen_absent_bones() const {
+  if (!bound_ || model_->nearest > 0) return {};
+  return character::unseen_absent_bones(bound_->mapping, model_->bones, model_->presence);
+}
 std::int32_t Deformer::mapped_joints() const {
   if (!bound_) return 0;
   return model_->nearest > 0 ? bound_->J : bound_->mapping.num_mapped();

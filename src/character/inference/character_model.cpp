@@ -161,7 +161,10 @@ BonePresence checkpoint_bone_presence(const models::CheckpointFile& f, const std
 
 std::string format_bone_presence(const std::vector<int>& count) {
   std::string s;
-  for (std::size_t i = 0; i < count.size(); ++i) s += (i ? "," : "") + std::to_string(count[i]);
+  for (std::size_t i = 0; i < count.size(); ++i) {
+    if (i) s += ',';
+    s += std::to_string(count[i]);
+  }
   return s;
 }
 
@@ -181,7 +184,10 @@ std::string unseen_absent_bones_warning(const std::string& what, const std::vect
                                         const BonePresence& presence) {
   if (absent.empty()) return "";
   std::string names;
-  for (std::size_t i = 0; i < absent.size() && i < 8; ++i) names += (i ? ", " : "") + absent[i];
+  for (std::size_t i = 0; i < absent.size() && i < 8; ++i) {
+    if (i) names += ", ";
+    names += absent[i];
+  }
   if (absent.size() > 8) names += ", ...";
   return "warning: " + what + " lacks " + std::to_string(absent.size()) + " of the model's " +
          std::to_string(presence.count.size()) + " bones that all " + std::to_string(presence.characters) +
