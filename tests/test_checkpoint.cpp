@@ -282,6 +282,64 @@ TEST_CASE("the checkpoint checksum does not depend on the order of tensors in th
   std::remove(b.c_str());
 }
 
+namespace {
+// A format-version-1 file of the same contents, as older gatcore wrote it:
+// format_version "1" and the checksum (FNV-1a 64) over the data section only.
+std::string version_1_bytes(const std::string& v2) {
+  std::uint64_t n = 0;
+  for (int k = 0; k < 8; ++k) n |= std::uint64_t(static_cast<unsigned char>(v2[std::size_t(k)])) << (8 * k);
+  std::string header = v2.substr(8, std::size_t(n));
+  const std::string data = v2.substr(8 + std::size_t(n));
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
+  char sum[17];
+  std::snprintf(sum, sizeof sum, "%016llx", static_cast<unsigned long long>(h));
+  // The header's JSON holds "format_version":"2" and "checksum":"<16 hex>" once each.
+  const auto put = [&](const std::string& key, const std::string& value) {
+    const std::string k = "\"" + key + "\":\"";
+    const std::size_t at = header.find(k);
+    REQUIRE(at != std::string::npos);
+    const std::size_t v = at + k.size(), end = header.find('"', v);
+    header.replace(v, end - v, value);
+  };
+  put("format_version", "1");
+  put("checksum", sum);
+  while (header.size() % 8) header += ' ';
+  std::string out;
+  for (int k = 0; k < 8; ++k) out += char((std::uint64_t(header.size()) >> (8 * k)) & 0xff);
+  return out + header + data;
+}
+}  // namespace
+
+TEST_CASE("version-1 checkpoints: refused with the way out, upgraded after their data checksum is verified") {
+  const std::string v2 = tmp_path("v2"), v1 = tmp_path("v1"), up = tmp_path("up"), bad = tmp_path("v1bad");
+  save_trained(v2);
+  spit(v1, version_1_bytes(slurp(v2)));
+  CHECK_THROWS_WITH(load_checkpoint(v1), Catch::Contains(v1) && Catch::Contains("unsupported format version '1'") &&
+                                             Catch::Contains("gat upgrade-checkpoint " + v1));
+  CHECK(upgrade_checkpoint(v1, up) == 1);
+  LoadedModel a = load_checkpoint(v2), b = load_checkpoint(up);
+  CHECK(b.file.metadata.at("format_version") == "2");
+  CHECK(b.file.metadata == a.file.metadata);  // the same contents, the version-2 checksum
+  REQUIRE(b.file.tensors.size() == a.file.tensors.size());
+  for (std::size_t i = 0; i < a.file.tensors.size(); ++i) {
+    const Tensor* t = b.file.find(a.file.tensors[i].first);
+    REQUIRE(t);
+    CHECK(t->to_vector() == a.file.tensors[i].second.to_vector());
+  }
+  // Its data changed: the version-1 checksum catches it, nothing is written.
+  std::string bytes = version_1_bytes(slurp(v2));
+  bytes[bytes.size() - 3] ^= 0x10;
+  spit(bad, bytes);
+  std::remove(up.c_str());
+  CHECK_THROWS_WITH(upgrade_checkpoint(bad, up), Catch::Contains("version-1 checksum mismatch") && Catch::Contains(bad));
+  CHECK_FALSE(std::ifstream(up).good());
+  // A version-2 file passes through (and may be upgraded in place).
+  CHECK(upgrade_checkpoint(v2, v2) == 2);
+  CHECK(load_checkpoint(v2).file.metadata == a.file.metadata);
+  for (const std::string& p : {v2, v1, up, bad}) std::remove(p.c_str());
+}
+
 // Driven by tests/python/resave_checkpoint.py (ctest checkpoint_python_resave):
 // writes a resumable checkpoint to $GATCORE_CKPT, or checks that the file
 // Python re-saved ($GATCORE_CKPT_RESAVED) holds the same model and state.

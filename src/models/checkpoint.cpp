@@ -130,7 +130,11 @@ void write_checkpoint_file(const std::string& path, const CheckpointFile& f) {
   }
 }
 
-CheckpointFile parse_checkpoint(std::string_view bytes, const std::string& path) {
+namespace {
+
+// allow_version_1: also read format version 1 (checksum over the data section
+// only), verified as such; the result is then written as version 2.
+CheckpointFile parse_checkpoint_impl(std::string_view bytes, const std::string& path, bool allow_version_1) {
   if (bytes.size() < 8) fail(path, detail::cat("truncated: ", bytes.size(), " bytes, not even a header length"));
   std::uint64_t n = 0;
   for (int k = 0; k < 8; ++k) n |= std::uint64_t(static_cast<unsigned char>(bytes[std::size_t(k)])) << (8 * k);
@@ -153,9 +157,14 @@ CheckpointFile parse_checkpoint(std::string_view bytes, const std::string& path)
   }
   if (f.metadata["format"] != kFormat)
     fail(path, "not a gatcore checkpoint: metadata \"format\" is '" + f.metadata["format"] + "', expected '" + kFormat + "'");
-  if (f.metadata["format_version"] != kVersion)
+  const bool version_1 = allow_version_1 && f.metadata["format_version"] == "1";
+  if (f.metadata["format_version"] != kVersion && !version_1)
     fail(path, "unsupported format version '" + f.metadata["format_version"] + "' (this build reads version " + kVersion +
-                   (f.metadata["format_version"] == "1" ? "; version 1 checksums did not cover the header" : "") + ")");
+                   (f.metadata["format_version"] == "1"
+                        ? "; version 1 checksums did not cover the header: `gat upgrade-checkpoint " + path +
+                              " -o NEW.gcm` checks its data and writes it as version 2"
+                        : "") +
+                   ")");
   const std::size_t data_begin = 8 + std::size_t(n);
   const std::uint64_t data_size = bytes.size() - data_begin;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> spans;
@@ -198,19 +207,37 @@ CheckpointFile parse_checkpoint(std::string_view bytes, const std::string& path)
     at = e;
   }
   if (at != data_size) fail(path, detail::cat("corrupted: ", data_size - at, " trailing bytes after the last tensor"));
+  if (version_1) {
+    // Version 1: FNV-1a 64 of the data section's bytes.
+    Fnv1a h;
+    h.add(bytes.data() + data_begin, std::size_t(data_size));
+    if (f.metadata["checksum"] != hex(h.h))
+      fail(path, "corrupted: version-1 checksum mismatch (stored '" + f.metadata["checksum"] + "', data give " + hex(h.h) +
+                     ")");
+    return f;
+  }
   const std::string sum = checksum(f.metadata, f.tensors);
   if (f.metadata["checksum"] != sum)
     fail(path, "corrupted: checksum mismatch (stored '" + f.metadata["checksum"] + "', header and data give " + sum + ")");
   return f;
 }
 
-CheckpointFile read_checkpoint_file(const std::string& path) {
+std::string read_bytes(const std::string& path) {
   std::ifstream is(path, std::ios::binary);
   if (!is) fail(path, std::string("cannot open: ") + std::strerror(errno));
   std::string bytes((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
   if (is.bad()) fail(path, "read error");
-  return parse_checkpoint(bytes, path);
+  return bytes;
 }
+
+}  // namespace
+
+CheckpointFile parse_checkpoint(std::string_view bytes, const std::string& path) {
+  return parse_checkpoint_impl(bytes, path, false);
+}
+
+
+CheckpointFile read_checkpoint_file(const std::string& path) { return parse_checkpoint(read_bytes(path), path); }
 
 namespace {
 
@@ -293,9 +320,11 @@ void save_checkpoint(const std::string& path, const Model& model, const Normalis
   write_checkpoint_file(path, f);
 }
 
-LoadedModel load_checkpoint(const std::string& path) {
+namespace {
+
+LoadedModel load_checkpoint_file(CheckpointFile file, const std::string& path) {
   LoadedModel out;
-  out.file = read_checkpoint_file(path);
+  out.file = std::move(file);
   const CheckpointFile& f = out.file;
   auto it = f.metadata.find("config");
   if (it == f.metadata.end()) fail(path, "no model configuration in the metadata");
@@ -344,6 +373,19 @@ LoadedModel load_checkpoint(const std::string& path) {
   }
   out.model = std::move(m);
   return out;
+}
+
+}  // namespace
+
+LoadedModel load_checkpoint(const std::string& path) { return load_checkpoint_file(read_checkpoint_file(path), path); }
+
+int upgrade_checkpoint(const std::string& in, const std::string& out) {
+  CheckpointFile f = parse_checkpoint_impl(read_bytes(in), in, true);
+  const int version = f.metadata.at("format_version") == "1" ? 1 : 2;
+  f.metadata["format_version"] = kVersion;  // checkpoint_bytes writes the version-2 checksum
+  (void)load_checkpoint_file(f, in);  // a model must load from it before anything is written
+  write_checkpoint_file(out, f);
+  return version;
 }
 
 void restore_training_state(const CheckpointFile& f, Trainer& t, const std::string& path) {

@@ -73,6 +73,15 @@ struct LoadedModel {
 };
 LoadedModel load_checkpoint(const std::string& path);
 
+// Reads `in`, a checkpoint of format version 1 (whose checksum covered the
+// data section only: it is verified as such) or 2, and writes it to `out` as
+// version 2 (the checksum over metadata and tensors), atomically; the result
+// must load as a model (load_checkpoint), else `out` is removed and the error
+// thrown. Returns the version read. The metadata is taken as the file has
+// it: version 1 could not tell an edited header, so upgrade only files you
+// trust (`gat upgrade-checkpoint`).
+int upgrade_checkpoint(const std::string& in, const std::string& out);
+
 // Restores optimiser moments, epoch, lr, RNG and scheduler state saved with
 // the trainer (the trainer must wrap the model loaded from the same file).
 void restore_training_state(const CheckpointFile& f, Trainer& trainer, const std::string& path = "checkpoint");
