@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -572,6 +573,58 @@ TEST_CASE("large logits stay finite and match the reference", "[attention][stabi
       CHECK(testutil::all_finite(dzd));
     }
   }
+}
+
+// gat_fused_additive_forward_rows (inference: rows handed to a sink in
+// chunks, no attention weights kept for H = F = 8) against the training
+// forward's rows: bitwise, every row exactly once, at every SIMD level, 1 and
+// 2 threads, narrow and wide logits (the lazy rescale branch).
+namespace {
+struct RowsCollect {
+  Tensor out;
+  std::vector<int> seen;  // per row (each chunk's rows are written by one thread)
+};
+void collect_rows(void* ctx, std::int64_t r0, std::int64_t r1, const float* rows) {
+  auto& c = *static_cast<RowsCollect*>(ctx);
+  const std::int64_t w = c.out.cols();
+  for (std::int64_t r = r0; r < r1; ++r) {
+    std::copy(rows + (r - r0) * w, rows + (r - r0 + 1) * w, c.out.row(r));
+    ++c.seen[std::size_t(r)];
+  }
+}
+}  // namespace
+
+TEST_CASE("gat_fused_additive_forward_rows gives gat_fused_additive_forward's rows bitwise", "[attention][fused]") {
+  Restore restore;
+  for (float spread : {3.f, 20.f})
+    for_each_config([&](const GraphCase& gc, Shape s, bool strided, std::uint32_t seed) {
+      const CsrGraph& g = gc.g;
+      const std::int64_t n = g.num_nodes, E = g.num_edges();
+      const int H = s.H, F = s.F;
+      std::mt19937 rng(seed);
+      Tensor z = random_tensor(n, H * F, rng, -1, 1, strided);
+      Tensor el = random_tensor(n, H, rng, -spread, spread, strided),
+             er = random_tensor(n, H, rng, -spread, spread, strided);
+      for (cpu::SimdLevel lvl : levels())
+        for (int nt : {1, 2}) {
+          cpu::set_simd_level(lvl);
+          omp_set_num_threads(nt);
+          INFO(context(gc.name, s, strided) << " spread " << spread << " simd=" << cpu::simd_level_name(lvl)
+                                            << " threads=" << nt);
+          Tensor want = Tensor::zeros(n, H * F), a = Tensor::zeros(E, H);
+          cpu::gat_fused_additive_forward(g, z, el, er, 0.2f, want, a);
+          RowsCollect c{Tensor::full(n, H * F, std::nanf("")), std::vector<int>(std::size_t(n), 0)};
+          Tensor scratch = Tensor::zeros(E, H);
+          cpu::gat_fused_additive_forward_rows(g, z, el, er, 0.2f, scratch, &collect_rows, &c);
+          CHECK(testutil::bitwise_equal(c.out, want));
+          CHECK(std::count(c.seen.begin(), c.seen.end(), 1) == n);
+        }
+    });
+  const CsrGraph g = graph_cases()[0].g;
+  CHECK_THROWS_WITH(cpu::gat_fused_additive_forward_rows(g, Tensor::zeros(g.num_nodes, 64), Tensor::zeros(g.num_nodes, 8),
+                                                         Tensor::zeros(g.num_nodes, 8), 0.2f,
+                                                         Tensor::zeros(g.num_edges(), 8), nullptr, nullptr),
+                    Catch::Contains("gat_fused_additive_forward_rows: no sink"));
 }
 
 TEST_CASE("fused online softmax rescales exactly when logits spread widely", "[attention][fused][rescale]") {

@@ -362,13 +362,14 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
   else
     be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
   be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
-  be.gat_fused_additive_forward(g, z, el, er, s.slope, both.cols_slice(0, kf), alpha);
-  if (out_words) {  // reads the self stream's product where the GEMM left it
-    cpu::gat_epilogue_bf16(both.cols_slice(0, kf), s.self_width > 0 ? zs.cols_slice(kf, kf + s.self_width) : Tensor{},
-                           s.self_width > 0 ? s.self_b : Tensor{}, s.bn ? s.bn_mean : Tensor{}, s.bn_scale,
-                           s.bn_shift, out_words, out_ld);
+  if (out_words) {  // attention and epilogue in one pass; reads the self stream's product where the GEMM left it
+    cpu::gat_attention_epilogue_bf16(g, z, el, er, s.slope, alpha,
+                                     s.self_width > 0 ? zs.cols_slice(kf, kf + s.self_width) : Tensor{},
+                                     s.self_width > 0 ? s.self_b : Tensor{}, s.bn ? s.bn_mean : Tensor{}, s.bn_scale,
+                                     s.bn_shift, out_words, out_ld);
     return;
   }
+  be.gat_fused_additive_forward(g, z, el, er, s.slope, both.cols_slice(0, kf), alpha);
   if (s.self_width > 0) {
     const Tensor self = both.cols_slice(kf, kf + s.self_width);
     if (cpu)
