@@ -76,9 +76,18 @@ bool cpu_has_avx512_bf16();
 // already as bf16 pair words (row i at aw + i * ldw, ceil(k/2) words; rows up
 // to m + kPadRows must be readable: a partial register tile reads them into
 // rows it does not store).
+// With `epi`: C's final values are not stored but finished in registers
+// (+ bias, tanh) and written as bf16 pair words (row i at epi->words + i *
+// epi->ldw); C then only holds partial sums when k spans several k blocks.
+struct Bf16Epilogue {
+  const float* bias = nullptr;  // n floats, or null
+  bool tanh = false;
+  std::uint32_t* words = nullptr;
+  std::int64_t ldw = 0;
+};
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
                       std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw = nullptr,
-                      std::int64_t ldw = 0);
+                      std::int64_t ldw = 0, const Bf16Epilogue* epi = nullptr);
 // x[0, count) as ceil(count/2) bf16 pair words (AVX512_BF16 CPUs only; the
 // conversion gemm_bf16_avx512 applies to A's rows).
 void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out);

@@ -21,8 +21,10 @@
 #include "kernels/target_region.hpp"
 
 #if defined(__x86_64__) && defined(__GNUC__)
-GATCORE_TARGET_BEGIN("avx512f,avx512bw,avx512vl,avx512bf16,avx2,fma")
+GATCORE_TARGET_BEGIN("avx512f,avx512bw,avx512vl,avx512dq,avx512bf16,avx2,fma")
 #include <immintrin.h>
+
+#include "kernels/fast_math.hpp"
 
 namespace gatcore::cpu::detail {
 namespace {
@@ -48,12 +50,23 @@ inline void convert_row(const float* a, std::int64_t k, std::uint32_t* dst) {
   }
 }
 
+// A tile's epilogue (the last k block of a Bf16Epilogue product): bias and
+// tanh columns from the tile's first, bf16 words of the tile's first row.
+struct TileEpi {
+  const float* bias = nullptr;
+  bool tanh = false;
+  std::uint32_t* words = nullptr;  // null: store C
+  std::int64_t ldw = 0;
+};
+
 // C[0:mr_eff, 0:nr_eff] (+)= A tile . B panel over kp pairs: A tile row r at
-// a + r * lda (pair words), B panel kp x NR words.
+// a + r * lda (pair words), B panel kp x NR words. With e.words: the sum
+// (+ bias, tanh) goes out as bf16 pair words instead (C only read, for the
+// earlier k blocks' partial sums).
 template <int MR, int NV>
 void micro_kernel(std::int64_t kp, const std::uint32_t* __restrict a, std::int64_t lda,
                   const std::uint32_t* __restrict bp, float* c, std::int64_t ldc, int mr_eff, int nr_eff,
-                  bool accumulate) {
+                  bool accumulate, const TileEpi& e) {
   constexpr int NR = 16 * NV;
   __m512 acc[MR][NV];
 #pragma GCC unroll 32
@@ -74,6 +87,31 @@ void micro_kernel(std::int64_t kp, const std::uint32_t* __restrict a, std::int64
   __mmask16 mask[NV];
 #pragma GCC unroll 8
   for (int v = 0; v < NV; ++v) mask[v] = lanes(nr_eff - 16 * v);
+  if (e.words) {
+    // add_row_bias's add, activation_forward's tanh (fastmath::tanh_avx512),
+    // bf16_pairs' rounding: the composition's arithmetic, without its passes.
+    // Lanes past nr_eff are zero (zero B padding, masked bias), so an odd
+    // width's last word gets a zero high half; words past the row are not written.
+    __m512 bias[NV];
+#pragma GCC unroll 8
+    for (int v = 0; v < NV; ++v) bias[v] = e.bias ? _mm512_maskz_loadu_ps(mask[v], e.bias + 16 * v) : _mm512_setzero_ps();
+#pragma GCC unroll 32
+    for (int r = 0; r < MR; ++r) {
+      if (r >= mr_eff) break;
+      const float* crow = c + r * ldc;
+      std::uint32_t* wrow = e.words + r * e.ldw;
+#pragma GCC unroll 8
+      for (int v = 0; v < NV; ++v) {
+        __m512 x = acc[r][v];
+        if (accumulate) x = _mm512_add_ps(x, _mm512_maskz_loadu_ps(mask[v], crow + 16 * v));
+        if (e.bias) x = _mm512_add_ps(x, bias[v]);
+        if (e.tanh) x = fastmath::tanh_avx512(x);
+        _mm256_mask_storeu_epi32(wrow + 8 * v, __mmask8(lanes((nr_eff - 16 * v + 1) / 2)),
+                                 (__m256i)_mm512_cvtneps_pbh(x));
+      }
+    }
+    return;
+  }
 #pragma GCC unroll 32
   for (int r = 0; r < MR; ++r) {
     if (r >= mr_eff) break;
@@ -108,18 +146,23 @@ struct Buffer {
 constexpr int mr_for(int nv) { return nv == 1 ? 24 : nv == 2 ? 12 : nv == 3 ? 8 : nv == 4 ? 6 : 5; }
 
 // One panel (NV vectors wide) down a row block of mc rows.
+// e: the panel's epilogue at the block's first row (words null: plain store).
 template <int NV>
 void panel_rows(std::int64_t mc, std::int64_t kp, const std::uint32_t* ab, std::int64_t lda_w,
-                const std::uint32_t* panel, float* c, std::int64_t ldc, int nr_eff, bool accumulate) {
+                const std::uint32_t* panel, float* c, std::int64_t ldc, int nr_eff, bool accumulate, TileEpi e) {
   constexpr int MR = mr_for(NV);
   static_assert(kMc % MR == 0, "row blocks are whole register tiles");
-  for (std::int64_t ir = 0; ir < mc; ir += MR)
+  std::uint32_t* const w0 = e.words;
+  for (std::int64_t ir = 0; ir < mc; ir += MR) {
+    if (w0) e.words = w0 + ir * e.ldw;
     micro_kernel<MR, NV>(kp, ab + ir * lda_w, lda_w, panel, c + ir * ldc, ldc, int(std::min<std::int64_t>(MR, mc - ir)),
-                         nr_eff, accumulate);
+                         nr_eff, accumulate, e);
+  }
 }
 
 void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
-               std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw) {
+               std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw,
+               const Bf16Epilogue* epi) {
   const std::int64_t kp_all = (k + 1) / 2;
   // Converted row stride (words; rows 64-byte aligned), or the caller's pre-converted rows.
   const std::int64_t lda_w = aw ? ldw : (kp_all + 15) / 16 * 16;
@@ -144,12 +187,20 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
           const std::uint32_t* at = ab + k0 / 2;
           float* ct = c + i0 * ldc + j0 + jr;
           const std::uint32_t* panel = block + jr * kp;
+          TileEpi e;
+          if (epi && k0 + kBf16Kc >= k) {  // the last k block: the sums are final
+            e.bias = epi->bias ? epi->bias + j0 + jr : nullptr;
+            e.tanh = epi->tanh;
+            e.words = epi->words + i0 * epi->ldw + (j0 + jr) / 2;  // j0 + jr even (multiples of 16)
+            e.ldw = epi->ldw;
+          }
+          const bool acc = k0 > 0;
           switch (w / 16) {
-            case 1: panel_rows<1>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
-            case 2: panel_rows<2>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
-            case 3: panel_rows<3>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
-            case 4: panel_rows<4>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
-            default: panel_rows<5>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
+            case 1: panel_rows<1>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 2: panel_rows<2>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 3: panel_rows<3>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 4: panel_rows<4>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            default: panel_rows<5>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
           }
         }
       }
@@ -160,9 +211,10 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
 }  // namespace
 
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
-                      std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw) {
+                      std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw,
+                      const Bf16Epilogue* epi) {
   if (m == 0 || n == 0) return;
-  gemm_rows(a, lda, m, k, bp, n, c, ldc, aw, ldw);
+  gemm_rows(a, lda, m, k, bp, n, c, ldc, aw, ldw, epi);
 }
 
 void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out) { convert_row(x, count, out); }

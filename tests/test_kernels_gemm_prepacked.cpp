@@ -13,6 +13,7 @@
 #include <limits>
 #include <random>
 
+#include "kernels/elementwise.hpp"
 #include "kernels/gemm.hpp"
 #include "kernels/gemm_bf16.hpp"
 #include "kernels/gemm_prepacked.hpp"
@@ -180,6 +181,58 @@ TEST_CASE("gemm_prepacked bf16: pre-converted bf16 rows give the float A's produ
   std::vector<std::uint32_t> w(48, 0);
   CHECK_THROWS_WITH(cpu::gemm_prepacked(cpu::Bf16Rows{w.data(), 2, 4, 2}, F, Tensor::empty(2, 3)),
                     Catch::Contains("need a B packed in bf16"));
+}
+
+TEST_CASE("gemm_prepacked_bias_act_bf16: the composition gemm_prepacked + add_row_bias + activation + bf16_pairs bitwise",
+          "[gemm_prepacked]") {
+  const bool hw = bf16_supported();
+  std::vector<std::uint32_t> w0(64, 0);
+  const cpu::PrepackedB P0 = cpu::prepack_b(Tensor::full(4, 3, 1.0f), Precision::bf16);
+  if (!hw) {
+    WARN("SKIPPED: this CPU has no AVX512_BF16 (the kernel's only user, the bf16 deploy path, runs there)");
+    CHECK_THROWS_WITH(cpu::gemm_prepacked_bias_act_bf16(cpu::Bf16Rows{w0.data(), 2, 4, 2}, P0, Tensor{},
+                                                        Activation::tanh, Tensor::empty(2, 3), w0.data(), 2),
+                      Catch::Contains("AVX512_BF16"));
+    return;
+  }
+  Rng rng(35);
+  // k 770, 1600: two and three k blocks (partial sums through C); n 520: two column blocks.
+  const Mkn shapes[] = {{1, 1, 1},    {37, 17, 8},   {250, 385, 17}, {241, 129, 3},   {300, 500, 520},
+                        {49, 770, 72}, {97, 131, 80}, {26, 64, 81},   {125, 390, 100}, {130, 1600, 33}};
+  for (const Mkn& s : shapes)
+    for (Activation act : {Activation::tanh, Activation::identity})
+      for (bool bias_on : {true, false})
+        for (int threads : {1, 2}) {
+          Threads t(threads);
+          INFO("m " << s.m << " k " << s.k << " n " << s.n << " " << activation_name(act) << " bias " << bias_on
+                    << " threads " << threads);
+          const Tensor A = random(rng, s.m, s.k, true, -2.f, 2.f), B = random(rng, s.k, s.n, false, -0.2f, 0.2f);
+          const Tensor bias = bias_on ? random(rng, 1, s.n, false) : Tensor{};
+          const cpu::PrepackedB P = cpu::prepack_b(B, Precision::bf16);
+          const std::int64_t lda = (s.k + 1) / 2 + 1, ld = (s.n + 1) / 2 + 2;
+          std::vector<std::uint32_t> aw(std::size_t((s.m + 24) * lda), 0u);
+          cpu::bf16_pairs(A, aw.data(), lda);
+          const cpu::Bf16Rows rows{aw.data(), s.m, s.k, lda};
+          // The composition.
+          Tensor c = Tensor::empty(s.m, s.n), y = Tensor::empty(s.m, s.n);
+          cpu::gemm_prepacked(rows, P, c);
+          if (bias_on) cpu::add_row_bias(bias, c);
+          if (act == Activation::tanh)
+            cpu::activation_forward(act, c, y, 0.f);
+          else
+            y = c;
+          std::vector<std::uint32_t> want(std::size_t(s.m * ld), 0xABCDu), got(want.size(), 0xABCDu);
+          cpu::bf16_pairs(y, want.data(), ld);
+          Tensor scratch = Tensor::full(s.m, s.n, std::numeric_limits<float>::quiet_NaN());
+          cpu::gemm_prepacked_bias_act_bf16(rows, P, bias, act, scratch, got.data(), ld);
+          CHECK(got == want);  // the words past each row untouched too
+        }
+  CHECK_THROWS_WITH(cpu::gemm_prepacked_bias_act_bf16(cpu::Bf16Rows{w0.data(), 2, 4, 2}, P0, Tensor{},
+                                                      Activation::relu, Tensor::empty(2, 3), w0.data(), 2),
+                    Catch::Contains("identity or tanh"));
+  CHECK_THROWS_WITH(cpu::gemm_prepacked_bias_act_bf16(cpu::Bf16Rows{w0.data(), 2, 4, 2}, P0, Tensor{},
+                                                      Activation::tanh, Tensor::empty(2, 3), w0.data(), 1),
+                    Catch::Contains("below 2 words"));
 }
 
 TEST_CASE("gemm_prepacked bf16 is not fp32: a product that bf16 rounding changes", "[gemm_prepacked]") {

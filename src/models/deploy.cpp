@@ -253,6 +253,12 @@ struct Shadow {
   std::vector<std::uint32_t, cpu::Aligned64<std::uint32_t>> words;
   std::int64_t ld = 0;  // words per row
 };
+Shadow shadow_for(std::int64_t n, std::int64_t cols) {
+  Shadow s;
+  s.ld = ((cols + 1) / 2 + 15) / 16 * 16;  // 64-byte aligned rows
+  s.words.assign(std::size_t((n + 24) * s.ld), 0u);  // 24 rows more (gemm_prepacked on Bf16Rows)
+  return s;
+}
 }  // namespace
 
 struct DeployPlan::Buffers {
@@ -262,6 +268,7 @@ struct DeployPlan::Buffers {
   Tensor z, both, tsh, el, er, alpha;  // GAT block scratch, reused by every block
   Tensor zs;  // CPU: [z | self] from the one product of a GAT block
   std::vector<Shadow> mod_bf16;  // CPU bf16: one per B.mod (empty when not used)
+  std::vector<Shadow> head_bf16;  // CPU bf16: each hidden head layer's output, only as bf16 (with mod_bf16)
   std::vector<Tensor> o_z, o_y, o_act, o_el, o_er, o_alpha;  // origat, per layer
   Tensor skip_lin, skip_out;  // config.linear_skip: x W + b, and the network's output plus it
 };
@@ -300,12 +307,7 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
     bool even = g.width() % 2 == 0;
     for (std::int64_t w : M.module_in) even = even && w % 2 == 0;
     if (M.device == Device::cpu && M.precision == Precision::bf16 && even)
-      for (const Tensor& t : B.mod) {
-        Shadow s;
-        s.ld = (t.cols() / 2 + 15) / 16 * 16;  // 64-byte aligned rows
-        s.words.assign(std::size_t((n_ + 24) * s.ld), 0u);  // 24 rows more (gemm_prepacked on Bf16Rows)
-        B.mod_bf16.push_back(std::move(s));
-      }
+      for (const Tensor& t : B.mod) B.mod_bf16.push_back(shadow_for(n_, t.cols()));
     if (M.device == Device::cpu) {
       B.zs = be.empty(n_, g.width());
       B.z = B.zs.cols_slice(0, g.kf());
@@ -320,6 +322,7 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
     for (std::size_t k = 0; k < M.head.size(); ++k) {
       B.h_lin.push_back(be.empty(n_, M.head[k].W.cols()));
       B.h_act.push_back(M.head[k].act != Activation::identity ? be.empty(n_, M.head[k].W.cols()) : Tensor{});
+      if (!B.mod_bf16.empty() && k + 1 < M.head.size()) B.head_bf16.push_back(shadow_for(n_, M.head[k].W.cols()));
     }
   }
   if (M.has_skip) {
@@ -474,9 +477,19 @@ const Tensor& DeployPlan::run() {
                   shadows ? B.mod_bf16[m + 1].words.data() : nullptr, shadows ? B.mod_bf16[m + 1].ld : 0);
       }
     }
+    bool y_in_yw = shadows;  // y's bf16 rows are yw
     for (std::size_t k = 0; k < M.head.size(); ++k) {
-      dense_step(be, M.head[k], y, B.h_lin[k], B.h_act[k], shadows && k == 0 ? &yw : nullptr);
+      if (y_in_yw && k + 1 < M.head.size() && M.head[k].act == Activation::tanh) {
+        // A hidden layer's output goes only to its bf16 rows (the next product's operand).
+        Shadow& h = B.head_bf16[k];
+        cpu::gemm_prepacked_bias_act_bf16(yw, M.head[k].Wp, M.head[k].b, Activation::tanh, B.h_lin[k],
+                                          h.words.data(), h.ld);
+        yw = shadow_rows(h, n_, 0, M.head[k].W.cols());
+        continue;
+      }
+      dense_step(be, M.head[k], y, B.h_lin[k], B.h_act[k], y_in_yw ? &yw : nullptr);
       y = M.head[k].act != Activation::identity ? B.h_act[k] : B.h_lin[k];
+      y_in_yw = false;
     }
     out = y;
   }
