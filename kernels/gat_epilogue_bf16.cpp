@@ -47,7 +47,7 @@ struct Epi {
   std::uint32_t* dst = nullptr;  // row 0
 };
 
-// Row r, its attention columns at a.
+// Row r, its attention columns at a (any width).
 inline void epilogue_row(const Epi& e, const float* a, std::int64_t r) {
   const float* sr = e.self ? e.self + r * e.lds : nullptr;
   std::uint32_t* d = e.dst + r * e.ld;
@@ -56,6 +56,65 @@ inline void epilogue_row(const Epi& e, const float* a, std::int64_t r) {
     const __m512 hi = epilogue16(a, sr, c + 16, e.W, e.kf, e.bias, e.m, e.s, e.b);
     // Zeroed lanes past W give a zero high half for an odd W (bf16_pairs' layout).
     _mm512_mask_storeu_epi32(d + c / 2, lanes((e.W - c + 1) / 2), (__m512i)_mm512_cvtne2ps_pbh(hi, lo));
+  }
+}
+
+// Rows [r0, r1) of a block at most 16 NV columns wide (the paper's 72: NV =
+// 5), row r's attention columns at att + (r - r0) lda. epilogue16's
+// arithmetic, with what is the same for every row (lane masks, bias, the
+// affine map's vectors) set up once per call instead of per row and vector,
+// and no vector past W (per row and vector, that setup and the masked-out
+// 6th vector of a 72-wide row cost more than the tanh).
+template <int NV>
+void epilogue_rows_nv(const Epi& e, const float* att, std::int64_t lda, std::int64_t r0, std::int64_t r1) {
+  __mmask16 am[NV], sm[NV];
+  __m512 bias[NV], mv[NV], sv[NV], bv[NV];
+  for (int v = 0; v < NV; ++v) {
+    const std::int64_t c = 16 * v;
+    const __mmask16 in = lanes(e.W - c);
+    sm[v] = in & ~lanes(e.kf - c);
+    am[v] = in & ~sm[v];
+    bias[v] = e.bias && sm[v] ? _mm512_maskz_loadu_ps(sm[v], e.bias + (c - e.kf)) : _mm512_setzero_ps();
+    mv[v] = e.m ? _mm512_maskz_loadu_ps(in, e.m + c) : _mm512_setzero_ps();
+    sv[v] = e.m ? _mm512_maskz_loadu_ps(in, e.s + c) : _mm512_setzero_ps();
+    bv[v] = e.m ? _mm512_maskz_loadu_ps(in, e.b + c) : _mm512_setzero_ps();
+  }
+  for (std::int64_t r = r0; r < r1; ++r) {
+    const float* a = att + (r - r0) * lda;
+    const float* sr = e.self ? e.self + r * e.lds : nullptr;
+    std::uint32_t* d = e.dst + r * e.ld;
+    __m512 y[NV];
+#pragma GCC unroll 8
+    for (int v = 0; v < NV; ++v) {
+      __m512 x = _mm512_maskz_loadu_ps(am[v], a + 16 * v);
+      if (sm[v]) {
+        x = _mm512_mask_loadu_ps(x, sm[v], sr + (16 * v - e.kf));
+        if (e.bias) x = _mm512_mask_add_ps(x, sm[v], x, bias[v]);
+      }
+      x = _mm512_sub_ps(x, fastmath::tanh_avx512(x));
+      if (e.m) x = _mm512_fmadd_ps(_mm512_sub_ps(x, mv[v]), sv[v], bv[v]);
+      y[v] = x;
+    }
+#pragma GCC unroll 8
+    for (int v = 0; v < NV; v += 2) {
+      const __mmask16 words = lanes((e.W - 16 * v + 1) / 2);
+      if (v + 1 < NV)
+        _mm512_mask_storeu_epi32(d + 8 * v, words, (__m512i)_mm512_cvtne2ps_pbh(y[v + 1], y[v]));
+      else  // the same rounding, one vector
+        _mm256_mask_storeu_epi32(d + 8 * v, __mmask8(words), (__m256i)_mm512_cvtneps_pbh(y[v]));
+    }
+  }
+}
+
+void epilogue_rows(const Epi& e, const float* att, std::int64_t lda, std::int64_t r0, std::int64_t r1) {
+  switch ((e.W + 15) / 16) {
+    case 1: epilogue_rows_nv<1>(e, att, lda, r0, r1); return;
+    case 2: epilogue_rows_nv<2>(e, att, lda, r0, r1); return;
+    case 3: epilogue_rows_nv<3>(e, att, lda, r0, r1); return;
+    case 4: epilogue_rows_nv<4>(e, att, lda, r0, r1); return;
+    case 5: epilogue_rows_nv<5>(e, att, lda, r0, r1); return;
+    default:
+      for (std::int64_t r = r0; r < r1; ++r) epilogue_row(e, att + (r - r0) * lda, r);
   }
 }
 
@@ -98,7 +157,7 @@ Epi epilogue_args(const Names& nm, std::int64_t n, std::int64_t kf, const Tensor
 
 void epilogue_rows_sink(void* ctx, std::int64_t r0, std::int64_t r1, const float* rows) {
   const Epi& e = *static_cast<const Epi*>(ctx);
-  for (std::int64_t r = r0; r < r1; ++r) epilogue_row(e, rows + (r - r0) * e.kf, r);
+  epilogue_rows(e, rows, e.kf, r0, r1);
 }
 
 }  // namespace
@@ -109,7 +168,11 @@ void gat_epilogue_bf16(const Tensor& att, const Tensor& self, const Tensor& self
   const Epi e = epilogue_args(GATCORE_EPI_NAMES("gat_epilogue_bf16"), att.rows(), att.cols(), self, self_b, mean, scale, shift, dst, ld);
   const float* ab = att.data();
   const std::int64_t lda = att.ld();
-  detail::for_each_row(att.rows(), e.W, [&](std::int64_t r) { epilogue_row(e, ab + r * lda, r); });
+  constexpr std::int64_t kRows = 32;  // rows per task (the per-call setup is spread over them)
+  detail::for_each_row((att.rows() + kRows - 1) / kRows, e.W * kRows, [&](std::int64_t t) {
+    const std::int64_t r0 = t * kRows;
+    epilogue_rows(e, ab + r0 * lda, lda, r0, std::min(att.rows(), r0 + kRows));
+  });
 }
 
 void gat_attention_epilogue_bf16(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er, float slope,

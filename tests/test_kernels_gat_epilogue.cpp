@@ -33,7 +33,7 @@ TEST_CASE("gat_epilogue_bf16 equals add_row_bias + tanhshrink + batchnorm_affine
     std::int64_t n, W, self0;
   };
   for (const Case& k : {Case{300, 72, 64}, Case{37, 33, 30}, Case{5, 8, 0}, Case{9, 1, 1}, Case{130, 40, 40},
-                        Case{64, 64, 64}, Case{11, 47, 17}})
+                        Case{64, 64, 64}, Case{11, 47, 17}, Case{50, 100, 90}, Case{20, 130, 128}})
     for (bool affine : {true, false})
       for (int threads : {1, 2}) {
         Threads t(threads);
