@@ -37,21 +37,23 @@ namespace detail {
 
 // Layout of a packed bf16 B ([k, n] row-major source): column blocks of
 // kBf16Nc, each its k blocks of kBf16Kc (even) in order; a block's columns,
-// zero-padded to a multiple of 16, are cut into panels of bf16_panel_width
-// columns, each kp = ceil(kc / 2) rows of that many 32-bit words, word (p, j) =
-// (B[k0 + 2p, j] low half, B[k0 + 2p + 1, j] high half) as bf16 (an odd k's
-// last pair has a zero high half): the operand VDPBF16PS multiplies pairwise
-// with a broadcast (A[i, 2p], A[i, 2p + 1]). Panels are 32 wide (two vectors
-// per row) while more than 80 columns are left, then one panel of the rest
-// (16 to 80): a GAT block's 72 columns (64 + the 8-wide self stream) are one
-// 80-wide panel, not 3 x 32.
+// zero-padded to a multiple of 8 (at least 16), are cut into panels of
+// bf16_panel_width columns, each kp = ceil(kc / 2) rows of that many 32-bit
+// words, word (p, j) = (B[k0 + 2p, j] low half, B[k0 + 2p + 1, j] high half)
+// as bf16 (an odd k's last pair has a zero high half): the operand VDPBF16PS
+// multiplies pairwise with a broadcast (A[i, 2p], A[i, 2p + 1]). Panels are
+// 32 wide (two vectors per row) while more than 80 columns are left, then one
+// panel of the rest (16 to 80): a GAT block's 72 columns (64 + the 8-wide
+// self stream) are one 72-wide panel, 4 vectors and a half vector (256-bit
+// VDPBF16PS: half a 512-bit one's cost on CPUs that split 512-bit operations
+// in two, as Zen 4 does; an 80-wide panel spent 10 % on zero columns).
 // k block: 384 pairs, all of k for DenseGATs' products (k <= 504). Measured
 // (one thread, [10000 x 392] x [392 x 72]): 3.7 ms at 768, 4.2 ms at 384,
 // 4.4 ms at 192: fewer passes over C beat keeping the B panel in L1 (the
 // panel streams from L2 with one load per 5-12 multiply-adds).
 constexpr std::int64_t kBf16Kc = 768;
 constexpr std::int64_t kBf16Nc = 512;
-inline std::int64_t bf16_ncpad(std::int64_t nc) { return (nc + 15) / 16 * 16; }
+inline std::int64_t bf16_ncpad(std::int64_t nc) { return nc <= 16 ? 16 : (nc + 7) / 8 * 8; }
 // Width of the panel starting at column jr of a block of nc columns.
 inline int bf16_panel_width(std::int64_t nc, std::int64_t jr) {
   const std::int64_t rest = bf16_ncpad(nc) - jr;
