@@ -130,12 +130,14 @@ void gemm_prepacked_bias_act_bf16(const Bf16Rows& A, const PrepackedB& B, const 
 #endif
 }
 
-void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C) {
+void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C, RowBlockSink sink, void* ctx) {
   check_bf16_rows("gemm_prepacked", "gemm_prepacked: C", A, B, C);
   const std::int64_t m = A.rows, k = A.cols, n = B.n;
   if (m == 0 || n == 0) return;
   if (k == 0) {
     for (std::int64_t r = 0; r < m; ++r) std::fill(C.row(r), C.row(r) + n, 0.0f);
+    if (sink)
+      for (std::int64_t i0 = 0; i0 < m; i0 += kRowBlock) sink(ctx, i0, std::min(kRowBlock, m - i0));
     return;
   }
   float* c = C.data();
@@ -145,16 +147,18 @@ void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C) {
 #if defined(__x86_64__) && defined(__GNUC__)
     if (hw) {
       detail::gemm_bf16_avx512(nullptr, 0, rows, k, B.bf16.data(), n, c + i0 * ldc, ldc, A.words + i0 * A.ld, A.ld);
-      return;
-    }
+    } else
 #endif
-    std::vector<float> a(static_cast<std::size_t>(k));  // the portable path: values back to floats
-    for (std::int64_t i = i0; i < i0 + rows; ++i) {
-      const std::uint32_t* w = A.words + i * A.ld;
-      for (std::int64_t kk = 0; kk < k; ++kk)
-        a[std::size_t(kk)] = bf16_to_float(std::uint16_t(kk % 2 ? w[kk / 2] >> 16 : w[kk / 2] & 0xFFFFu));
-      detail::gemm_bf16_portable(a.data(), k, 1, k, B.plain.data(), B.plain.ld(), n, c + i * ldc, ldc);
+    {
+      std::vector<float> a(static_cast<std::size_t>(k));  // the portable path: values back to floats
+      for (std::int64_t i = i0; i < i0 + rows; ++i) {
+        const std::uint32_t* w = A.words + i * A.ld;
+        for (std::int64_t kk = 0; kk < k; ++kk)
+          a[std::size_t(kk)] = bf16_to_float(std::uint16_t(kk % 2 ? w[kk / 2] >> 16 : w[kk / 2] & 0xFFFFu));
+        detail::gemm_bf16_portable(a.data(), k, 1, k, B.plain.data(), B.plain.ld(), n, c + i * ldc, ldc);
+      }
     }
+    if (sink) sink(ctx, i0, rows);
   });
 }
 

@@ -71,7 +71,12 @@ void bf16_pairs(const Tensor& A, std::uint32_t* dst, std::int64_t ld);
 // C = A B for a bf16 packed B: bitwise gemm_prepacked on the float A these
 // words came from. The storage must hold A.rows + 24 rows of ld words (the
 // kernel's last register tile reads rows it does not store).
-void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C);
+// With `sink`: each row block [i0, i0 + rows) of C is handed to sink(ctx,
+// i0, rows) by the thread that computed it, as soon as it is done (still in
+// cache; blocks of one call are disjoint, in any order across threads).
+using RowBlockSink = void (*)(void* ctx, std::int64_t i0, std::int64_t rows);
+void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C, RowBlockSink sink = nullptr,
+                    void* ctx = nullptr);
 // A dense layer on bf16 rows, its output as bf16 rows for the next product:
 // dst = bf16_pairs(act(A B + bias)) (act: identity or tanh), bitwise
 // gemm_prepacked, add_row_bias, activation_forward and bf16_pairs, but the

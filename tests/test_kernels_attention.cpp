@@ -231,6 +231,35 @@ TEST_CASE("attention_projection forward and backward match the reference", "[att
       }
 }
 
+TEST_CASE("attention_projection_forward_rows gives the whole call's rows bitwise, touching no others",
+          "[attention][projection]") {
+  Restore restore;
+  std::uint32_t seed = 70;
+  for (Shape s : kShapes)
+    for (cpu::SimdLevel lvl : levels()) {
+      cpu::set_simd_level(lvl);
+      std::mt19937 rng(++seed);
+      const std::int64_t n = 300;
+      const int H = s.H, F = s.F;
+      const Tensor z = random_tensor(n, H * F, rng, -1, 1, true);
+      const Tensor al = random_tensor(H, F, rng, -1, 1, true), ar = random_tensor(H, F, rng, -1, 1, false);
+      Tensor el = Tensor::empty(n, H), er = Tensor::empty(n, H);
+      cpu::attention_projection_forward(z, al, ar, el, er);
+      Tensor el2 = Tensor::full(n, H, 7.f), er2 = Tensor::full(n, H, 7.f);
+      INFO("H=" << H << " F=" << F << " simd=" << cpu::simd_level_name(lvl));
+      for (std::int64_t r0 : {0, 120, 240}) cpu::attention_projection_forward_rows(z, al, ar, el2, er2, r0, r0 + 60);
+      for (std::int64_t r = 0; r < n; ++r) {
+        const bool done = r % 120 < 60;
+        for (int k = 0; k < H; ++k) {
+          CHECK(el2.at(r, k) == (done ? el.at(r, k) : 7.f));
+          CHECK(er2.at(r, k) == (done ? er.at(r, k) : 7.f));
+        }
+      }
+      CHECK_THROWS_WITH(cpu::attention_projection_forward_rows(z, al, ar, el2, er2, 250, 301),
+                        Catch::Contains("rows [250, 301) outside [0, 300)"));
+    }
+}
+
 // ---- edge softmax -----------------------------------------------------------------
 
 TEST_CASE("edge_softmax_additive forward and backward match the reference", "[attention][softmax]") {

@@ -8,6 +8,8 @@
 // register tiles), strided A, 1 vs 2 threads.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -233,6 +235,44 @@ TEST_CASE("gemm_prepacked_bias_act_bf16: the composition gemm_prepacked + add_ro
   CHECK_THROWS_WITH(cpu::gemm_prepacked_bias_act_bf16(cpu::Bf16Rows{w0.data(), 2, 4, 2}, P0, Tensor{},
                                                       Activation::tanh, Tensor::empty(2, 3), w0.data(), 1),
                     Catch::Contains("below 2 words"));
+}
+
+TEST_CASE("gemm_prepacked bf16 rows with a row-block sink: each block once, after its rows are final",
+          "[gemm_prepacked]") {
+  Rng rng(37);
+  struct Seen {
+    const Tensor* c;
+    const Tensor* want;
+    std::vector<int> rows;
+    std::atomic<int> bad{0};
+  };
+  for (const Mkn& s : {Mkn{1000, 130, 72}, Mkn{37, 17, 8}, Mkn{241, 0, 3}})
+    for (int threads : {1, 2}) {
+      Threads t(threads);
+      INFO("m " << s.m << " k " << s.k << " n " << s.n << " threads " << threads);
+      const Tensor A = random(rng, s.m, s.k, false), B = random(rng, s.k, s.n, false);
+      const cpu::PrepackedB P = cpu::prepack_b(B, Precision::bf16);
+      const std::int64_t ld = (s.k + 1) / 2 + 1;
+      std::vector<std::uint32_t> words(std::size_t((s.m + 24) * ld), 0u);
+      cpu::bf16_pairs(A, words.data(), ld);
+      const cpu::Bf16Rows rows{words.data(), s.m, s.k, ld};
+      Tensor want = Tensor::empty(s.m, s.n), got = Tensor::full(s.m, s.n, std::numeric_limits<float>::quiet_NaN());
+      cpu::gemm_prepacked(rows, P, want);
+      Seen seen{&got, &want, std::vector<int>(std::size_t(s.m), 0), {}};
+      cpu::gemm_prepacked(
+          rows, P, got,
+          [](void* ctx, std::int64_t i0, std::int64_t n) {
+            Seen& z = *static_cast<Seen*>(ctx);
+            for (std::int64_t i = i0; i < i0 + n; ++i) {
+              ++z.rows[std::size_t(i)];  // blocks are disjoint: no two threads write one entry
+              if (std::memcmp(z.c->row(i), z.want->row(i), sizeof(float) * std::size_t(z.c->cols())) != 0) ++z.bad;
+            }
+          },
+          &seen);
+      CHECK(seen.bad.load() == 0);  // the block's rows were final when the sink saw them
+      CHECK(std::count(seen.rows.begin(), seen.rows.end(), 1) == s.m);
+      CHECK(same_bits(got, want));
+    }
 }
 
 TEST_CASE("gemm_prepacked bf16 is not fp32: a product that bf16 rounding changes", "[gemm_prepacked]") {

@@ -10,6 +10,7 @@
 
 #include "gatcore/backend.hpp"
 #include "gatcore/vulkan.hpp"
+#include "kernels/attention_projection.hpp"
 #include "kernels/batchnorm.hpp"
 #include "kernels/gat_epilogue_bf16.hpp"
 #include "kernels/gemm_prepacked.hpp"
@@ -358,13 +359,22 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
                const cpu::Bf16Rows* xw = nullptr, std::uint32_t* out_words = nullptr, std::int64_t out_ld = 0) {
   const std::int64_t kf = s.kf();
   const bool cpu = be.device() == Device::cpu;
-  if (xw)
-    cpu::gemm_prepacked(*xw, s.Wp, zs);
-  else if (cpu)
-    cpu::gemm_prepacked(x, s.Wp, zs);
-  else
-    be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
-  be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
+  if (xw) {
+    // The attention projection of each row block of z as soon as the product has it (still in cache).
+    struct Proj {
+      const Tensor &z, &a_dst, &a_src, &el, &er;
+    } proj{z, s.att_dst, s.att_src, el, er};
+    cpu::gemm_prepacked(*xw, s.Wp, zs, [](void* c, std::int64_t i0, std::int64_t rows) {
+      const Proj& p = *static_cast<const Proj*>(c);
+      cpu::attention_projection_forward_rows(p.z, p.a_dst, p.a_src, p.el, p.er, i0, i0 + rows);
+    }, &proj);
+  } else {
+    if (cpu)
+      cpu::gemm_prepacked(x, s.Wp, zs);
+    else
+      be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
+    be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
+  }
   if (out_words) {  // attention and epilogue in one pass; reads the self stream's product where the GEMM left it
     cpu::gat_attention_epilogue_bf16(g, z, el, er, s.slope, alpha,
                                      s.self_width > 0 ? zs.cols_slice(kf, kf + s.self_width) : Tensor{},
