@@ -55,8 +55,12 @@ constexpr std::int64_t kBf16Kc = 768;
 constexpr std::int64_t kBf16Nc = 512;
 inline std::int64_t bf16_ncpad(std::int64_t nc) { return nc <= 16 ? 16 : (nc + 7) / 8 * 8; }
 // Width of the panel starting at column jr of a block of nc columns.
-inline int bf16_panel_width(std::int64_t nc, std::int64_t jr) {
+// k: B's rows. A 64-wide rest over more than 128 pairs is two 32-wide panels:
+// its 6 x 64 panel (64 KiB at k = 512) streams from L2 and ran at 2/3 of the
+// 12 x 32 tile's rate (the head's 512 -> 128 layer).
+inline int bf16_panel_width(std::int64_t k, std::int64_t nc, std::int64_t jr) {
   const std::int64_t rest = bf16_ncpad(nc) - jr;
+  if (rest == 64 && k > 256) return 32;
   return rest <= 80 ? int(rest) : 32;
 }
 // Rows past a row block the kernel may read (its last register tile's, not stored).

@@ -214,7 +214,7 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
         const std::int64_t kp = (std::min(kBf16Kc, k - k0) + 1) / 2;
         const std::uint32_t* block = bp + packed_bf16_offset(k, j0, nc, k0);
         for (std::int64_t jr = 0, w = 0; jr < nc; jr += w) {
-          w = bf16_panel_width(nc, jr);
+          w = bf16_panel_width(k, nc, jr);
           const int nr_eff = int(std::min<std::int64_t>(w, nc - jr));
           const std::uint32_t* at = ab + k0 / 2;
           float* ct = c + i0 * ldc + j0 + jr;
