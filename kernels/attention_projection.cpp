@@ -61,6 +61,18 @@ void attention_projection_forward(const Tensor& z, const Tensor& a_l, const Tens
   parallel_blocks(nb, a.n * a.H, [&](std::int64_t b) { f(a, b); });
 }
 
+void attention_projection_forward_rows(const Tensor& z, const Tensor& a_l, const Tensor& a_r, const Tensor& el,
+                                       const Tensor& er, std::int64_t r0, std::int64_t r1) {
+  static const char* fn = "attention_projection_forward_rows";
+  ProjArgs a = proj_args(fn, z, a_l, a_r);
+  check_arg(fn, "el", el, {"n", a.n}, {"H", a.H});
+  check_arg(fn, "er", er, {"n", a.n}, {"H", a.H});
+  GATCORE_CHECK(0 <= r0 && r0 <= r1 && r1 <= a.n, fn, ": rows [", r0, ", ", r1, ") outside [0, ", a.n, ")");
+  a.el = mat(el);
+  a.er = mat(er);
+  ATTN_SELECT(a.H == 8 && a.F == 8, proj_fwd_rows)(a, r0, r1);
+}
+
 void attention_projection_backward(const Tensor& z, const Tensor& a_l, const Tensor& a_r, const Tensor& d_el,
                                    const Tensor& d_er, const Tensor& d_z, const Tensor& d_al, const Tensor& d_ar) {
   static const char* fn = "attention_projection_backward";

@@ -10,6 +10,11 @@ namespace gatcore::cpu {
 
 void attention_projection_forward(const Tensor& z, const Tensor& a_l, const Tensor& a_r, const Tensor& el,
                                   const Tensor& er);
+// Rows [r0, r1) only, on the calling thread (no parallel region): for a
+// caller already inside one, e.g. after each row block of z's product while
+// the block is in cache (models/deploy.cpp). The same values as the whole call.
+void attention_projection_forward_rows(const Tensor& z, const Tensor& a_l, const Tensor& a_r, const Tensor& el,
+                                       const Tensor& er, std::int64_t r0, std::int64_t r1);
 
 // Accumulates: d_z += d_el ⊗ a_l + d_er ⊗ a_r (per head),
 //              d_al[k,:] += Σ_i d_el[i,k] z_i^k,  d_ar likewise.

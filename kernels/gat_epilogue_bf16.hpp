@@ -16,11 +16,23 @@
 // path uses bf16 nowhere else); throws otherwise.
 #include <cstdint>
 
+#include "gatcore/graph.hpp"
 #include "gatcore/tensor.hpp"
 
 namespace gatcore::cpu {
 
 void gat_epilogue_bf16(const Tensor& att, const Tensor& self, const Tensor& self_b, const Tensor& mean,
                        const Tensor& scale, const Tensor& shift, std::uint32_t* dst, std::int64_t ld);
+
+// The block's attention and this epilogue in one pass: att =
+// gat_fused_additive_forward(g, z, el, er, slope) row by row
+// (gat_fused_additive_forward_rows), each chunk of rows finished while still
+// in L1, so neither att [n, kf] nor (for 8 heads of 8) the attention weights
+// go through memory. Bitwise gat_fused_additive_forward followed by
+// gat_epilogue_bf16 (tested). alpha [E, H]: scratch (see
+// gat_fused_additive_forward_rows).
+void gat_attention_epilogue_bf16(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er, float slope,
+                                 const Tensor& alpha, const Tensor& self, const Tensor& self_b, const Tensor& mean,
+                                 const Tensor& scale, const Tensor& shift, std::uint32_t* dst, std::int64_t ld);
 
 }  // namespace gatcore::cpu

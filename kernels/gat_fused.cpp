@@ -74,6 +74,26 @@ void gat_fused_additive_forward(const CsrGraph& g, const Tensor& z, const Tensor
   parallel_rows(a.g, a.g.indptr, [&](std::int64_t b, std::int64_t e) { f(a, b, e); });
 }
 
+void gat_fused_additive_forward_rows(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
+                                     float slope, const Tensor& alpha, AttentionRowsSink sink, void* ctx) {
+  static const char* fn = "gat_fused_additive_forward_rows";
+  GATCORE_CHECK(sink, fn, ": no sink");
+  FusedArgs a = additive_args(fn, g, z, el, er, alpha);
+  a.slope = slope;
+  const auto f = ATTN_SELECT(a.H == 8 && a.F == 8, fused_add_fwd_rows);
+  // 32 rows of 64 floats: 8 KiB, the chunk stays in L1 for the sink.
+  constexpr std::int64_t kChunk = 32;
+  const std::int64_t w = z.cols();
+  parallel_rows(a.g, a.g.indptr, [&](std::int64_t b, std::int64_t e) {
+    float* buf = scratch(static_cast<std::size_t>(kChunk * w), 3);
+    for (std::int64_t c0 = b; c0 < e; c0 += kChunk) {
+      const std::int64_t c1 = std::min(e, c0 + kChunk);
+      f(a, c0, c1, buf);
+      sink(ctx, c0, c1, buf);
+    }
+  });
+}
+
 void gat_fused_dot_forward(const CsrGraph& g, const Tensor& z, int heads, float scale, const Tensor& out,
                            const Tensor& alpha) {
   static const char* fn = "gat_fused_dot_forward";

@@ -12,6 +12,16 @@ namespace gatcore::cpu {
 
 void gat_fused_additive_forward(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
                                 float slope, const Tensor& out, const Tensor& alpha);
+// Inference: the additive forward's output handed to `sink` in chunks of
+// consecutive rows as each thread finishes them (out rows r0..r1 at rows +
+// (i - r0) H F, a small per-thread buffer still in L1), instead of an [n, H F]
+// tensor written and read back by the next pass. Bitwise the rows
+// gat_fused_additive_forward gives. alpha [E, H] is scratch: H = F = 8 (the
+// register path) stores no weights at all; other shapes write them there.
+// Calls to sink come from the OpenMP threads, each chunk once.
+using AttentionRowsSink = void (*)(void* ctx, std::int64_t r0, std::int64_t r1, const float* rows);
+void gat_fused_additive_forward_rows(const CsrGraph& g, const Tensor& z, const Tensor& el, const Tensor& er,
+                                     float slope, const Tensor& alpha, AttentionRowsSink sink, void* ctx);
 void gat_fused_dot_forward(const CsrGraph& g, const Tensor& z, int heads, float scale, const Tensor& out,
                            const Tensor& alpha);
 

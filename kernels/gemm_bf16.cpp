@@ -25,7 +25,7 @@ void pack_b_bf16(const float* b, std::int64_t ldb, std::int64_t k, std::int64_t 
       const std::int64_t kp = (std::min(kBf16Kc, k - k0) + 1) / 2;
       std::uint32_t* block = dst + packed_bf16_offset(k, j0, nc, k0);
       for (std::int64_t jr = 0, w = 0; jr < ncpad; jr += w) {
-        w = bf16_panel_width(nc, jr);
+        w = bf16_panel_width(k, nc, jr);
         for (std::int64_t p = 0; p < kp; ++p)
           for (std::int64_t c = 0; c < w; ++c) {
             const std::int64_t j = j0 + jr + c, kk = k0 + 2 * p;

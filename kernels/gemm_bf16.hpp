@@ -37,24 +37,30 @@ namespace detail {
 
 // Layout of a packed bf16 B ([k, n] row-major source): column blocks of
 // kBf16Nc, each its k blocks of kBf16Kc (even) in order; a block's columns,
-// zero-padded to a multiple of 16, are cut into panels of bf16_panel_width
-// columns, each kp = ceil(kc / 2) rows of that many 32-bit words, word (p, j) =
-// (B[k0 + 2p, j] low half, B[k0 + 2p + 1, j] high half) as bf16 (an odd k's
-// last pair has a zero high half): the operand VDPBF16PS multiplies pairwise
-// with a broadcast (A[i, 2p], A[i, 2p + 1]). Panels are 32 wide (two vectors
-// per row) while more than 80 columns are left, then one panel of the rest
-// (16 to 80): a GAT block's 72 columns (64 + the 8-wide self stream) are one
-// 80-wide panel, not 3 x 32.
+// zero-padded to a multiple of 8 (at least 16), are cut into panels of
+// bf16_panel_width columns, each kp = ceil(kc / 2) rows of that many 32-bit
+// words, word (p, j) = (B[k0 + 2p, j] low half, B[k0 + 2p + 1, j] high half)
+// as bf16 (an odd k's last pair has a zero high half): the operand VDPBF16PS
+// multiplies pairwise with a broadcast (A[i, 2p], A[i, 2p + 1]). Panels are
+// 32 wide (two vectors per row) while more than 80 columns are left, then one
+// panel of the rest (16 to 80): a GAT block's 72 columns (64 + the 8-wide
+// self stream) are one 72-wide panel, 4 vectors and a half vector (256-bit
+// VDPBF16PS: half a 512-bit one's cost on CPUs that split 512-bit operations
+// in two, as Zen 4 does; an 80-wide panel spent 10 % on zero columns).
 // k block: 384 pairs, all of k for DenseGATs' products (k <= 504). Measured
 // (one thread, [10000 x 392] x [392 x 72]): 3.7 ms at 768, 4.2 ms at 384,
 // 4.4 ms at 192: fewer passes over C beat keeping the B panel in L1 (the
 // panel streams from L2 with one load per 5-12 multiply-adds).
 constexpr std::int64_t kBf16Kc = 768;
 constexpr std::int64_t kBf16Nc = 512;
-inline std::int64_t bf16_ncpad(std::int64_t nc) { return (nc + 15) / 16 * 16; }
+inline std::int64_t bf16_ncpad(std::int64_t nc) { return nc <= 16 ? 16 : (nc + 7) / 8 * 8; }
 // Width of the panel starting at column jr of a block of nc columns.
-inline int bf16_panel_width(std::int64_t nc, std::int64_t jr) {
+// k: B's rows. A 64-wide rest over more than 128 pairs is two 32-wide panels:
+// its 6 x 64 panel (64 KiB at k = 512) streams from L2 and ran at 2/3 of the
+// 12 x 32 tile's rate (the head's 512 -> 128 layer).
+inline int bf16_panel_width(std::int64_t k, std::int64_t nc, std::int64_t jr) {
   const std::int64_t rest = bf16_ncpad(nc) - jr;
+  if (rest == 64 && k > 256) return 32;
   return rest <= 80 ? int(rest) : 32;
 }
 // Rows past a row block the kernel may read (its last register tile's, not stored).
@@ -76,9 +82,18 @@ bool cpu_has_avx512_bf16();
 // already as bf16 pair words (row i at aw + i * ldw, ceil(k/2) words; rows up
 // to m + kPadRows must be readable: a partial register tile reads them into
 // rows it does not store).
+// With `epi`: C's final values are not stored but finished in registers
+// (+ bias, tanh) and written as bf16 pair words (row i at epi->words + i *
+// epi->ldw); C then only holds partial sums when k spans several k blocks.
+struct Bf16Epilogue {
+  const float* bias = nullptr;  // n floats, or null
+  bool tanh = false;
+  std::uint32_t* words = nullptr;
+  std::int64_t ldw = 0;
+};
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
                       std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw = nullptr,
-                      std::int64_t ldw = 0);
+                      std::int64_t ldw = 0, const Bf16Epilogue* epi = nullptr);
 // x[0, count) as ceil(count/2) bf16 pair words (AVX512_BF16 CPUs only; the
 // conversion gemm_bf16_avx512 applies to A's rows).
 void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out);

@@ -9,9 +9,9 @@
 // k, contiguous per row: kMc x k/2 words, in L2); B comes packed
 // (pack_b_bf16, at bind) in kBf16Kc-deep panels (L1 / L2) while a register
 // tile of MR rows x the panel's columns runs down the block (12 x 32 for
-// wide products; one panel of all columns up to 80: 24 x 16, 8 x 48, 6 x 64,
-// 5 x 80, so a GAT block's 72 columns are one 5 x 80 tile with 5 multiply-adds
-// per broadcast of A). Each C element sums its k blocks in order, a function
+// wide products; one panel of all columns up to 80: 24 x 16, 12 x 24, 8 x 48,
+// 6 x 64, 5 x 72, 5 x 80, so a GAT block's 72 columns are one 5 x 72 tile
+// with 4.5 vectors of multiply-adds per broadcast of A). Each C element sums its k blocks in order, a function
 // of the shape only: results do not depend on the thread count.
 #include <algorithm>
 #include <cstdint>
@@ -21,8 +21,16 @@
 #include "kernels/target_region.hpp"
 
 #if defined(__x86_64__) && defined(__GNUC__)
-GATCORE_TARGET_BEGIN("avx512f,avx512bw,avx512vl,avx512bf16,avx2,fma")
+GATCORE_TARGET_BEGIN("avx512f,avx512bw,avx512vl,avx512dq,avx512bf16,avx2,fma")
+// (GCC 12's -Wmaybe-uninitialized false positive inside its own AVX-512
+// headers, PR 105593: see fast_math.hpp.)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #include <immintrin.h>
+#pragma GCC diagnostic pop
+
+#include "kernels/fast_math.hpp"
 
 namespace gatcore::cpu::detail {
 namespace {
@@ -48,32 +56,89 @@ inline void convert_row(const float* a, std::int64_t k, std::uint32_t* dst) {
   }
 }
 
+// A tile's epilogue (the last k block of a Bf16Epilogue product): bias and
+// tanh columns from the tile's first, bf16 words of the tile's first row.
+struct TileEpi {
+  const float* bias = nullptr;
+  bool tanh = false;
+  std::uint32_t* words = nullptr;  // null: store C
+  std::int64_t ldw = 0;
+};
+
 // C[0:mr_eff, 0:nr_eff] (+)= A tile . B panel over kp pairs: A tile row r at
-// a + r * lda (pair words), B panel kp x NR words.
-template <int MR, int NV>
+// a + r * lda (pair words), B panel kp x NR words. With e.words: the sum
+// (+ bias, tanh) goes out as bf16 pair words instead (C only read, for the
+// earlier k blocks' partial sums).
+// NV 16-wide vectors and, with HALF, 8 more columns in a 256-bit vector
+// (panel width 16 NV + 8 HALF; the packed rows are that many words, so
+// unaligned loads).
+template <int MR, int NV, bool HALF>
 void micro_kernel(std::int64_t kp, const std::uint32_t* __restrict a, std::int64_t lda,
                   const std::uint32_t* __restrict bp, float* c, std::int64_t ldc, int mr_eff, int nr_eff,
-                  bool accumulate) {
-  constexpr int NR = 16 * NV;
-  __m512 acc[MR][NV];
+                  bool accumulate, const TileEpi& e) {
+  constexpr int NR = 16 * NV + 8 * HALF;
+  constexpr int NV1 = NV > 0 ? NV : 1;  // array sizes
+  __m512 acc[MR][NV1];
+  __m256 acch[MR];
 #pragma GCC unroll 32
-  for (int r = 0; r < MR; ++r)
+  for (int r = 0; r < MR; ++r) {
 #pragma GCC unroll 8
     for (int v = 0; v < NV; ++v) acc[r][v] = _mm512_setzero_ps();
+    if constexpr (HALF) acch[r] = _mm256_setzero_ps();
+  }
   for (std::int64_t p = 0; p < kp; ++p) {
-    __m512bh b[NV];
+    __m512bh b[NV1];
+    __m256bh bh;
 #pragma GCC unroll 8
-    for (int v = 0; v < NV; ++v) b[v] = (__m512bh)_mm512_load_si512(bp + p * NR + 16 * v);
+    for (int v = 0; v < NV; ++v) b[v] = (__m512bh)_mm512_loadu_si512(bp + p * NR + 16 * v);
+    if constexpr (HALF) bh = (__m256bh)_mm256_loadu_si256(reinterpret_cast<const __m256i*>(bp + p * NR + 16 * NV));
 #pragma GCC unroll 32
     for (int r = 0; r < MR; ++r) {
-      const __m512bh x = (__m512bh)_mm512_set1_epi32(int(a[r * lda + p]));
+      const __m512i xi = _mm512_set1_epi32(int(a[r * lda + p]));
+      const __m512bh x = (__m512bh)xi;
 #pragma GCC unroll 8
       for (int v = 0; v < NV; ++v) acc[r][v] = _mm512_dpbf16_ps(acc[r][v], x, b[v]);
+      if constexpr (HALF) acch[r] = _mm256_dpbf16_ps(acch[r], (__m256bh)_mm512_castsi512_si256(xi), bh);
     }
   }
-  __mmask16 mask[NV];
+  __mmask16 mask[NV1];
 #pragma GCC unroll 8
   for (int v = 0; v < NV; ++v) mask[v] = lanes(nr_eff - 16 * v);
+  const __mmask8 maskh = __mmask8(lanes(nr_eff - 16 * NV));
+  if (e.words) {
+    // add_row_bias's add, activation_forward's tanh (fastmath::tanh_avx512),
+    // bf16_pairs' rounding: the composition's arithmetic, without its passes.
+    // Lanes past nr_eff are zero (zero B padding, masked bias), so an odd
+    // width's last word gets a zero high half; words past the row are not written.
+    __m512 bias[NV1];
+#pragma GCC unroll 8
+    for (int v = 0; v < NV; ++v) bias[v] = e.bias ? _mm512_maskz_loadu_ps(mask[v], e.bias + 16 * v) : _mm512_setzero_ps();
+    const __m256 biash = HALF && e.bias ? _mm256_maskz_loadu_ps(maskh, e.bias + 16 * NV) : _mm256_setzero_ps();
+#pragma GCC unroll 32
+    for (int r = 0; r < MR; ++r) {
+      if (r >= mr_eff) break;
+      const float* crow = c + r * ldc;
+      std::uint32_t* wrow = e.words + r * e.ldw;
+#pragma GCC unroll 8
+      for (int v = 0; v < NV; ++v) {
+        __m512 x = acc[r][v];
+        if (accumulate) x = _mm512_add_ps(x, _mm512_maskz_loadu_ps(mask[v], crow + 16 * v));
+        if (e.bias) x = _mm512_add_ps(x, bias[v]);
+        if (e.tanh) x = fastmath::tanh_avx512(x);
+        _mm256_mask_storeu_epi32(wrow + 8 * v, __mmask8(lanes((nr_eff - 16 * v + 1) / 2)),
+                                 (__m256i)_mm512_cvtneps_pbh(x));
+      }
+      if constexpr (HALF) {  // the same on 8 columns (tanh on the zero-extended vector)
+        __m256 x = acch[r];
+        if (accumulate) x = _mm256_add_ps(x, _mm256_maskz_loadu_ps(maskh, crow + 16 * NV));
+        if (e.bias) x = _mm256_add_ps(x, biash);
+        if (e.tanh) x = _mm512_castps512_ps256(fastmath::tanh_avx512(_mm512_zextps256_ps512(x)));
+        _mm_mask_storeu_epi32(wrow + 8 * NV, __mmask8(lanes((nr_eff - 16 * NV + 1) / 2)),
+                              (__m128i)_mm256_cvtneps_pbh(x));
+      }
+    }
+    return;
+  }
 #pragma GCC unroll 32
   for (int r = 0; r < MR; ++r) {
     if (r >= mr_eff) break;
@@ -83,6 +148,11 @@ void micro_kernel(std::int64_t kp, const std::uint32_t* __restrict a, std::int64
       __m512 x = acc[r][v];
       if (accumulate) x = _mm512_add_ps(x, _mm512_maskz_loadu_ps(mask[v], crow + 16 * v));
       _mm512_mask_storeu_ps(crow + 16 * v, mask[v], x);
+    }
+    if constexpr (HALF) {
+      __m256 x = acch[r];
+      if (accumulate) x = _mm256_add_ps(x, _mm256_maskz_loadu_ps(maskh, crow + 16 * NV));
+      _mm256_mask_storeu_ps(crow + 16 * NV, maskh, x);
     }
   }
 }
@@ -101,25 +171,30 @@ struct Buffer {
   }
 };
 
-// Register tile rows for a panel of NV vectors (16 columns each): about 24
-// accumulators, and NV accumulators per broadcast of A (the broadcasts, not
-// the multiply-adds, bound the narrow tiles: 24 x 16 ran at half the 12 x 32
-// tile's rate).
+// Register tile rows for a panel of nv vector registers per row (16 columns
+// each, or 8 for a half one): about 24 accumulators, and nv accumulators per
+// broadcast of A (the broadcasts, not the multiply-adds, bound the narrow
+// tiles: 24 x 16 ran at half the 12 x 32 tile's rate).
 constexpr int mr_for(int nv) { return nv == 1 ? 24 : nv == 2 ? 12 : nv == 3 ? 8 : nv == 4 ? 6 : 5; }
 
-// One panel (NV vectors wide) down a row block of mc rows.
-template <int NV>
+// One panel (NV vectors + HALF wide) down a row block of mc rows.
+// e: the panel's epilogue at the block's first row (words null: plain store).
+template <int NV, bool HALF>
 void panel_rows(std::int64_t mc, std::int64_t kp, const std::uint32_t* ab, std::int64_t lda_w,
-                const std::uint32_t* panel, float* c, std::int64_t ldc, int nr_eff, bool accumulate) {
-  constexpr int MR = mr_for(NV);
+                const std::uint32_t* panel, float* c, std::int64_t ldc, int nr_eff, bool accumulate, TileEpi e) {
+  constexpr int MR = mr_for(NV + HALF);
   static_assert(kMc % MR == 0, "row blocks are whole register tiles");
-  for (std::int64_t ir = 0; ir < mc; ir += MR)
-    micro_kernel<MR, NV>(kp, ab + ir * lda_w, lda_w, panel, c + ir * ldc, ldc, int(std::min<std::int64_t>(MR, mc - ir)),
-                         nr_eff, accumulate);
+  std::uint32_t* const w0 = e.words;
+  for (std::int64_t ir = 0; ir < mc; ir += MR) {
+    if (w0) e.words = w0 + ir * e.ldw;
+    micro_kernel<MR, NV, HALF>(kp, ab + ir * lda_w, lda_w, panel, c + ir * ldc, ldc, int(std::min<std::int64_t>(MR, mc - ir)),
+                         nr_eff, accumulate, e);
+  }
 }
 
 void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
-               std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw) {
+               std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw,
+               const Bf16Epilogue* epi) {
   const std::int64_t kp_all = (k + 1) / 2;
   // Converted row stride (words; rows 64-byte aligned), or the caller's pre-converted rows.
   const std::int64_t lda_w = aw ? ldw : (kp_all + 15) / 16 * 16;
@@ -139,17 +214,29 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
         const std::int64_t kp = (std::min(kBf16Kc, k - k0) + 1) / 2;
         const std::uint32_t* block = bp + packed_bf16_offset(k, j0, nc, k0);
         for (std::int64_t jr = 0, w = 0; jr < nc; jr += w) {
-          w = bf16_panel_width(nc, jr);
+          w = bf16_panel_width(k, nc, jr);
           const int nr_eff = int(std::min<std::int64_t>(w, nc - jr));
           const std::uint32_t* at = ab + k0 / 2;
           float* ct = c + i0 * ldc + j0 + jr;
           const std::uint32_t* panel = block + jr * kp;
-          switch (w / 16) {
-            case 1: panel_rows<1>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
-            case 2: panel_rows<2>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
-            case 3: panel_rows<3>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
-            case 4: panel_rows<4>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
-            default: panel_rows<5>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, k0 > 0); break;
+          TileEpi e;
+          if (epi && k0 + kBf16Kc >= k) {  // the last k block: the sums are final
+            e.bias = epi->bias ? epi->bias + j0 + jr : nullptr;
+            e.tanh = epi->tanh;
+            e.words = epi->words + i0 * epi->ldw + (j0 + jr) / 2;  // j0 + jr even (multiples of 16)
+            e.ldw = epi->ldw;
+          }
+          const bool acc = k0 > 0;
+          switch (w / 8) {  // 16 .. 80 columns, a multiple of 8
+            case 2: panel_rows<1, false>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 3: panel_rows<1, true>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 4: panel_rows<2, false>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 5: panel_rows<2, true>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 6: panel_rows<3, false>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 7: panel_rows<3, true>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 8: panel_rows<4, false>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            case 9: panel_rows<4, true>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
+            default: panel_rows<5, false>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
           }
         }
       }
@@ -160,9 +247,10 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
 }  // namespace
 
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
-                      std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw) {
+                      std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw,
+                      const Bf16Epilogue* epi) {
   if (m == 0 || n == 0) return;
-  gemm_rows(a, lda, m, k, bp, n, c, ldc, aw, ldw);
+  gemm_rows(a, lda, m, k, bp, n, c, ldc, aw, ldw, epi);
 }
 
 void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out) { convert_row(x, count, out); }

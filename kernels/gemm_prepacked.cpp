@@ -93,18 +93,51 @@ void bf16_pairs(const Tensor& A, std::uint32_t* dst, std::int64_t ld) {
   });
 }
 
-void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C) {
-  check_cpu_f32(C, "gemm_prepacked: C");
+namespace {
+// Shape checks of a product on bf16 rows (fn names the entry point).
+void check_bf16_rows(const char* fn, const char* fn_c, const Bf16Rows& A, const PrepackedB& B, const Tensor& C) {
+  check_cpu_f32(C, fn_c);
   const std::int64_t m = A.rows, k = A.cols, n = B.n;
-  GATCORE_CHECK(B.precision == Precision::bf16, "gemm_prepacked: bf16 rows need a B packed in bf16");
-  GATCORE_CHECK(k == B.k, "gemm_prepacked: A [", m, ", ", k, "] has ", k, " columns, the packed B has ", B.k, " rows");
-  GATCORE_CHECK(C.rows() == m && C.cols() == n, "gemm_prepacked: C: expected shape [", m, ", ", n, "], got ",
-                C.shape_str());
-  GATCORE_CHECK(A.words && A.ld >= (k + 1) / 2, "gemm_prepacked: bf16 rows: null, or ld ", A.ld, " below ",
-                (k + 1) / 2, " words");
+  GATCORE_CHECK(B.precision == Precision::bf16, fn, ": bf16 rows need a B packed in bf16");
+  GATCORE_CHECK(k == B.k, fn, ": A [", m, ", ", k, "] has ", k, " columns, the packed B has ", B.k, " rows");
+  GATCORE_CHECK(C.rows() == m && C.cols() == n, fn, ": C: expected shape [", m, ", ", n, "], got ", C.shape_str());
+  GATCORE_CHECK(A.words && A.ld >= (k + 1) / 2, fn, ": bf16 rows: null, or ld ", A.ld, " below ", (k + 1) / 2,
+                " words");
+}
+}  // namespace
+
+void gemm_prepacked_bias_act_bf16(const Bf16Rows& A, const PrepackedB& B, const Tensor& bias, Activation act,
+                                  const Tensor& C, std::uint32_t* dst, std::int64_t ld) {
+  static const char* fn = "gemm_prepacked_bias_act_bf16";
+  check_bf16_rows(fn, "gemm_prepacked_bias_act_bf16: C", A, B, C);
+  const std::int64_t m = A.rows, k = A.cols, n = B.n;
+  GATCORE_CHECK(act == Activation::identity || act == Activation::tanh, fn, ": activation ", activation_name(act),
+                " (identity or tanh only)");
+  if (bias.defined()) detail::check_arg(bias, 1, n, "gemm_prepacked_bias_act_bf16: bias");
+  GATCORE_CHECK(dst && ld >= (n + 1) / 2, fn, ": destination null, or ld ", ld, " below ", (n + 1) / 2, " words");
+  GATCORE_CHECK(!B.bf16.empty() && bf16_supported(), fn, ": needs a CPU with AVX512_BF16");
+  GATCORE_CHECK(k > 0, fn, ": k = 0");
+  if (m == 0 || n == 0) return;
+#if defined(__x86_64__) && defined(__GNUC__)
+  float* c = C.data();
+  const std::int64_t ldc = C.ld();
+  const detail::Bf16Epilogue epi{bias.defined() ? bias.data() : nullptr, act == Activation::tanh, dst, ld};
+  for_row_blocks(m, n, k, [&](std::int64_t i0, std::int64_t rows) {
+    detail::Bf16Epilogue e = epi;
+    e.words = dst + i0 * ld;
+    detail::gemm_bf16_avx512(nullptr, 0, rows, k, B.bf16.data(), n, c + i0 * ldc, ldc, A.words + i0 * A.ld, A.ld, &e);
+  });
+#endif
+}
+
+void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C, RowBlockSink sink, void* ctx) {
+  check_bf16_rows("gemm_prepacked", "gemm_prepacked: C", A, B, C);
+  const std::int64_t m = A.rows, k = A.cols, n = B.n;
   if (m == 0 || n == 0) return;
   if (k == 0) {
     for (std::int64_t r = 0; r < m; ++r) std::fill(C.row(r), C.row(r) + n, 0.0f);
+    if (sink)
+      for (std::int64_t i0 = 0; i0 < m; i0 += kRowBlock) sink(ctx, i0, std::min(kRowBlock, m - i0));
     return;
   }
   float* c = C.data();
@@ -114,16 +147,18 @@ void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C) {
 #if defined(__x86_64__) && defined(__GNUC__)
     if (hw) {
       detail::gemm_bf16_avx512(nullptr, 0, rows, k, B.bf16.data(), n, c + i0 * ldc, ldc, A.words + i0 * A.ld, A.ld);
-      return;
-    }
+    } else
 #endif
-    std::vector<float> a(static_cast<std::size_t>(k));  // the portable path: values back to floats
-    for (std::int64_t i = i0; i < i0 + rows; ++i) {
-      const std::uint32_t* w = A.words + i * A.ld;
-      for (std::int64_t kk = 0; kk < k; ++kk)
-        a[std::size_t(kk)] = bf16_to_float(std::uint16_t(kk % 2 ? w[kk / 2] >> 16 : w[kk / 2] & 0xFFFFu));
-      detail::gemm_bf16_portable(a.data(), k, 1, k, B.plain.data(), B.plain.ld(), n, c + i * ldc, ldc);
+    {
+      std::vector<float> a(static_cast<std::size_t>(k));  // the portable path: values back to floats
+      for (std::int64_t i = i0; i < i0 + rows; ++i) {
+        const std::uint32_t* w = A.words + i * A.ld;
+        for (std::int64_t kk = 0; kk < k; ++kk)
+          a[std::size_t(kk)] = bf16_to_float(std::uint16_t(kk % 2 ? w[kk / 2] >> 16 : w[kk / 2] & 0xFFFFu));
+        detail::gemm_bf16_portable(a.data(), k, 1, k, B.plain.data(), B.plain.ld(), n, c + i * ldc, ldc);
+      }
     }
+    if (sink) sink(ctx, i0, rows);
   });
 }
 

@@ -16,6 +16,7 @@
 #include <new>
 #include <vector>
 
+#include "gatcore/activation.hpp"
 #include "gatcore/precision.hpp"
 #include "gatcore/tensor.hpp"
 
@@ -70,6 +71,21 @@ void bf16_pairs(const Tensor& A, std::uint32_t* dst, std::int64_t ld);
 // C = A B for a bf16 packed B: bitwise gemm_prepacked on the float A these
 // words came from. The storage must hold A.rows + 24 rows of ld words (the
 // kernel's last register tile reads rows it does not store).
-void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C);
+// With `sink`: each row block [i0, i0 + rows) of C is handed to sink(ctx,
+// i0, rows) by the thread that computed it, as soon as it is done (still in
+// cache; blocks of one call are disjoint, in any order across threads).
+using RowBlockSink = void (*)(void* ctx, std::int64_t i0, std::int64_t rows);
+void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C, RowBlockSink sink = nullptr,
+                    void* ctx = nullptr);
+// A dense layer on bf16 rows, its output as bf16 rows for the next product:
+// dst = bf16_pairs(act(A B + bias)) (act: identity or tanh), bitwise
+// gemm_prepacked, add_row_bias, activation_forward and bf16_pairs, but the
+// sums are finished in the product's registers: no fp32 [m, n] written and
+// read back three times. bias: [1, n] or undefined. C [m, n]: scratch (the
+// partial sums of k beyond one k block; contents unspecified afterwards).
+// dst: rows of ld >= ceil(n / 2) words (+ 24 rows, as for the Bf16Rows that
+// reads them). AVX512_BF16 CPUs only (throws otherwise).
+void gemm_prepacked_bias_act_bf16(const Bf16Rows& A, const PrepackedB& B, const Tensor& bias, Activation act,
+                                  const Tensor& C, std::uint32_t* dst, std::int64_t ld);
 
 }  // namespace gatcore::cpu

@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -228,6 +229,35 @@ TEST_CASE("attention_projection forward and backward match the reference", "[att
         cpu::attention_projection_backward(z, al, ar, d_el, d_er, Tensor{}, dal, Tensor{});
         CHECK_CLOSE(dal, dal_ref, kTol);
       }
+}
+
+TEST_CASE("attention_projection_forward_rows gives the whole call's rows bitwise, touching no others",
+          "[attention][projection]") {
+  Restore restore;
+  std::uint32_t seed = 70;
+  for (Shape s : kShapes)
+    for (cpu::SimdLevel lvl : levels()) {
+      cpu::set_simd_level(lvl);
+      std::mt19937 rng(++seed);
+      const std::int64_t n = 300;
+      const int H = s.H, F = s.F;
+      const Tensor z = random_tensor(n, H * F, rng, -1, 1, true);
+      const Tensor al = random_tensor(H, F, rng, -1, 1, true), ar = random_tensor(H, F, rng, -1, 1, false);
+      Tensor el = Tensor::empty(n, H), er = Tensor::empty(n, H);
+      cpu::attention_projection_forward(z, al, ar, el, er);
+      Tensor el2 = Tensor::full(n, H, 7.f), er2 = Tensor::full(n, H, 7.f);
+      INFO("H=" << H << " F=" << F << " simd=" << cpu::simd_level_name(lvl));
+      for (std::int64_t r0 : {0, 120, 240}) cpu::attention_projection_forward_rows(z, al, ar, el2, er2, r0, r0 + 60);
+      for (std::int64_t r = 0; r < n; ++r) {
+        const bool done = r % 120 < 60;
+        for (int k = 0; k < H; ++k) {
+          CHECK(el2.at(r, k) == (done ? el.at(r, k) : 7.f));
+          CHECK(er2.at(r, k) == (done ? er.at(r, k) : 7.f));
+        }
+      }
+      CHECK_THROWS_WITH(cpu::attention_projection_forward_rows(z, al, ar, el2, er2, 250, 301),
+                        Catch::Contains("rows [250, 301) outside [0, 300)"));
+    }
 }
 
 // ---- edge softmax -----------------------------------------------------------------
@@ -572,6 +602,58 @@ TEST_CASE("large logits stay finite and match the reference", "[attention][stabi
       CHECK(testutil::all_finite(dzd));
     }
   }
+}
+
+// gat_fused_additive_forward_rows (inference: rows handed to a sink in
+// chunks, no attention weights kept for H = F = 8) against the training
+// forward's rows: bitwise, every row exactly once, at every SIMD level, 1 and
+// 2 threads, narrow and wide logits (the lazy rescale branch).
+namespace {
+struct RowsCollect {
+  Tensor out;
+  std::vector<int> seen;  // per row (each chunk's rows are written by one thread)
+};
+void collect_rows(void* ctx, std::int64_t r0, std::int64_t r1, const float* rows) {
+  auto& c = *static_cast<RowsCollect*>(ctx);
+  const std::int64_t w = c.out.cols();
+  for (std::int64_t r = r0; r < r1; ++r) {
+    std::copy(rows + (r - r0) * w, rows + (r - r0 + 1) * w, c.out.row(r));
+    ++c.seen[std::size_t(r)];
+  }
+}
+}  // namespace
+
+TEST_CASE("gat_fused_additive_forward_rows gives gat_fused_additive_forward's rows bitwise", "[attention][fused]") {
+  Restore restore;
+  for (float spread : {3.f, 20.f})
+    for_each_config([&](const GraphCase& gc, Shape s, bool strided, std::uint32_t seed) {
+      const CsrGraph& g = gc.g;
+      const std::int64_t n = g.num_nodes, E = g.num_edges();
+      const int H = s.H, F = s.F;
+      std::mt19937 rng(seed);
+      Tensor z = random_tensor(n, H * F, rng, -1, 1, strided);
+      Tensor el = random_tensor(n, H, rng, -spread, spread, strided),
+             er = random_tensor(n, H, rng, -spread, spread, strided);
+      for (cpu::SimdLevel lvl : levels())
+        for (int nt : {1, 2}) {
+          cpu::set_simd_level(lvl);
+          omp_set_num_threads(nt);
+          INFO(context(gc.name, s, strided) << " spread " << spread << " simd=" << cpu::simd_level_name(lvl)
+                                            << " threads=" << nt);
+          Tensor want = Tensor::zeros(n, H * F), a = Tensor::zeros(E, H);
+          cpu::gat_fused_additive_forward(g, z, el, er, 0.2f, want, a);
+          RowsCollect c{Tensor::full(n, H * F, std::nanf("")), std::vector<int>(std::size_t(n), 0)};
+          Tensor scratch = Tensor::zeros(E, H);
+          cpu::gat_fused_additive_forward_rows(g, z, el, er, 0.2f, scratch, &collect_rows, &c);
+          CHECK(testutil::bitwise_equal(c.out, want));
+          CHECK(std::count(c.seen.begin(), c.seen.end(), 1) == n);
+        }
+    });
+  const CsrGraph g = graph_cases()[0].g;
+  CHECK_THROWS_WITH(cpu::gat_fused_additive_forward_rows(g, Tensor::zeros(g.num_nodes, 64), Tensor::zeros(g.num_nodes, 8),
+                                                         Tensor::zeros(g.num_nodes, 8), 0.2f,
+                                                         Tensor::zeros(g.num_edges(), 8), nullptr, nullptr),
+                    Catch::Contains("gat_fused_additive_forward_rows: no sink"));
 }
 
 TEST_CASE("fused online softmax rescales exactly when logits spread widely", "[attention][fused][rescale]") {

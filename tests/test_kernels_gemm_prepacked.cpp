@@ -8,11 +8,14 @@
 // register tiles), strided A, 1 vs 2 threads.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
 
+#include "kernels/elementwise.hpp"
 #include "kernels/gemm.hpp"
 #include "kernels/gemm_bf16.hpp"
 #include "kernels/gemm_prepacked.hpp"
@@ -29,7 +32,7 @@ struct Mkn {
 };
 const Mkn kShapes[] = {{1, 1, 1},     {5, 3, 2},     {37, 17, 8},   {121, 193, 16}, {250, 385, 17},
                        {130, 64, 64}, {241, 129, 3}, {13, 600, 33}, {300, 500, 520}, {49, 770, 72},
-                       {21, 50, 40},  {97, 131, 80}, {26, 64, 81},  {125, 390, 100}};
+                       {21, 50, 40},  {97, 131, 80}, {26, 64, 81},  {125, 390, 100}, {60, 300, 64}, {50, 513, 128}};
 
 bool same_bits(const Tensor& a, const Tensor& b) {
   if (a.rows() != b.rows() || a.cols() != b.cols()) return false;
@@ -180,6 +183,96 @@ TEST_CASE("gemm_prepacked bf16: pre-converted bf16 rows give the float A's produ
   std::vector<std::uint32_t> w(48, 0);
   CHECK_THROWS_WITH(cpu::gemm_prepacked(cpu::Bf16Rows{w.data(), 2, 4, 2}, F, Tensor::empty(2, 3)),
                     Catch::Contains("need a B packed in bf16"));
+}
+
+TEST_CASE("gemm_prepacked_bias_act_bf16: the composition gemm_prepacked + add_row_bias + activation + bf16_pairs bitwise",
+          "[gemm_prepacked]") {
+  const bool hw = bf16_supported();
+  std::vector<std::uint32_t> w0(64, 0);
+  const cpu::PrepackedB P0 = cpu::prepack_b(Tensor::full(4, 3, 1.0f), Precision::bf16);
+  if (!hw) {
+    WARN("SKIPPED: this CPU has no AVX512_BF16 (the kernel's only user, the bf16 deploy path, runs there)");
+    CHECK_THROWS_WITH(cpu::gemm_prepacked_bias_act_bf16(cpu::Bf16Rows{w0.data(), 2, 4, 2}, P0, Tensor{},
+                                                        Activation::tanh, Tensor::empty(2, 3), w0.data(), 2),
+                      Catch::Contains("AVX512_BF16"));
+    return;
+  }
+  Rng rng(35);
+  // k 770, 1600: two and three k blocks (partial sums through C); n 520: two column blocks.
+  const Mkn shapes[] = {{1, 1, 1},    {37, 17, 8},   {250, 385, 17}, {241, 129, 3},   {300, 500, 520},
+                        {49, 770, 72}, {97, 131, 80}, {26, 64, 81},   {125, 390, 100}, {130, 1600, 33}};
+  for (const Mkn& s : shapes)
+    for (Activation act : {Activation::tanh, Activation::identity})
+      for (bool bias_on : {true, false})
+        for (int threads : {1, 2}) {
+          Threads t(threads);
+          INFO("m " << s.m << " k " << s.k << " n " << s.n << " " << activation_name(act) << " bias " << bias_on
+                    << " threads " << threads);
+          const Tensor A = random(rng, s.m, s.k, true, -2.f, 2.f), B = random(rng, s.k, s.n, false, -0.2f, 0.2f);
+          const Tensor bias = bias_on ? random(rng, 1, s.n, false) : Tensor{};
+          const cpu::PrepackedB P = cpu::prepack_b(B, Precision::bf16);
+          const std::int64_t lda = (s.k + 1) / 2 + 1, ld = (s.n + 1) / 2 + 2;
+          std::vector<std::uint32_t> aw(std::size_t((s.m + 24) * lda), 0u);
+          cpu::bf16_pairs(A, aw.data(), lda);
+          const cpu::Bf16Rows rows{aw.data(), s.m, s.k, lda};
+          // The composition.
+          Tensor c = Tensor::empty(s.m, s.n), y = Tensor::empty(s.m, s.n);
+          cpu::gemm_prepacked(rows, P, c);
+          if (bias_on) cpu::add_row_bias(bias, c);
+          if (act == Activation::tanh)
+            cpu::activation_forward(act, c, y, 0.f);
+          else
+            y = c;
+          std::vector<std::uint32_t> want(std::size_t(s.m * ld), 0xABCDu), got(want.size(), 0xABCDu);
+          cpu::bf16_pairs(y, want.data(), ld);
+          Tensor scratch = Tensor::full(s.m, s.n, std::numeric_limits<float>::quiet_NaN());
+          cpu::gemm_prepacked_bias_act_bf16(rows, P, bias, act, scratch, got.data(), ld);
+          CHECK(got == want);  // the words past each row untouched too
+        }
+  CHECK_THROWS_WITH(cpu::gemm_prepacked_bias_act_bf16(cpu::Bf16Rows{w0.data(), 2, 4, 2}, P0, Tensor{},
+                                                      Activation::relu, Tensor::empty(2, 3), w0.data(), 2),
+                    Catch::Contains("identity or tanh"));
+  CHECK_THROWS_WITH(cpu::gemm_prepacked_bias_act_bf16(cpu::Bf16Rows{w0.data(), 2, 4, 2}, P0, Tensor{},
+                                                      Activation::tanh, Tensor::empty(2, 3), w0.data(), 1),
+                    Catch::Contains("below 2 words"));
+}
+
+TEST_CASE("gemm_prepacked bf16 rows with a row-block sink: each block once, after its rows are final",
+          "[gemm_prepacked]") {
+  Rng rng(37);
+  struct Seen {
+    const Tensor* c;
+    const Tensor* want;
+    std::vector<int> rows;
+    std::atomic<int> bad{0};
+  };
+  for (const Mkn& s : {Mkn{1000, 130, 72}, Mkn{37, 17, 8}, Mkn{241, 0, 3}})
+    for (int threads : {1, 2}) {
+      Threads t(threads);
+      INFO("m " << s.m << " k " << s.k << " n " << s.n << " threads " << threads);
+      const Tensor A = random(rng, s.m, s.k, false), B = random(rng, s.k, s.n, false);
+      const cpu::PrepackedB P = cpu::prepack_b(B, Precision::bf16);
+      const std::int64_t ld = (s.k + 1) / 2 + 1;
+      std::vector<std::uint32_t> words(std::size_t((s.m + 24) * ld), 0u);
+      cpu::bf16_pairs(A, words.data(), ld);
+      const cpu::Bf16Rows rows{words.data(), s.m, s.k, ld};
+      Tensor want = Tensor::empty(s.m, s.n), got = Tensor::full(s.m, s.n, std::numeric_limits<float>::quiet_NaN());
+      cpu::gemm_prepacked(rows, P, want);
+      Seen seen{&got, &want, std::vector<int>(std::size_t(s.m), 0), {}};
+      cpu::gemm_prepacked(
+          rows, P, got,
+          [](void* ctx, std::int64_t i0, std::int64_t n) {
+            Seen& z = *static_cast<Seen*>(ctx);
+            for (std::int64_t i = i0; i < i0 + n; ++i) {
+              ++z.rows[std::size_t(i)];  // blocks are disjoint: no two threads write one entry
+              if (std::memcmp(z.c->row(i), z.want->row(i), sizeof(float) * std::size_t(z.c->cols())) != 0) ++z.bad;
+            }
+          },
+          &seen);
+      CHECK(seen.bad.load() == 0);  // the block's rows were final when the sink saw them
+      CHECK(std::count(seen.rows.begin(), seen.rows.end(), 1) == s.m);
+      CHECK(same_bits(got, want));
+    }
 }
 
 TEST_CASE("gemm_prepacked bf16 is not fp32: a product that bf16 rounding changes", "[gemm_prepacked]") {

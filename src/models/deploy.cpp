@@ -10,6 +10,7 @@
 
 #include "gatcore/backend.hpp"
 #include "gatcore/vulkan.hpp"
+#include "kernels/attention_projection.hpp"
 #include "kernels/batchnorm.hpp"
 #include "kernels/gat_epilogue_bf16.hpp"
 #include "kernels/gemm_prepacked.hpp"
@@ -253,6 +254,12 @@ struct Shadow {
   std::vector<std::uint32_t, cpu::Aligned64<std::uint32_t>> words;
   std::int64_t ld = 0;  // words per row
 };
+Shadow shadow_for(std::int64_t n, std::int64_t cols) {
+  Shadow s;
+  s.ld = ((cols + 1) / 2 + 15) / 16 * 16;  // 64-byte aligned rows
+  s.words.assign(std::size_t((n + 24) * s.ld), 0u);  // 24 rows more (gemm_prepacked on Bf16Rows)
+  return s;
+}
 }  // namespace
 
 struct DeployPlan::Buffers {
@@ -262,6 +269,7 @@ struct DeployPlan::Buffers {
   Tensor z, both, tsh, el, er, alpha;  // GAT block scratch, reused by every block
   Tensor zs;  // CPU: [z | self] from the one product of a GAT block
   std::vector<Shadow> mod_bf16;  // CPU bf16: one per B.mod (empty when not used)
+  std::vector<Shadow> head_bf16;  // CPU bf16: each hidden head layer's output, only as bf16 (with mod_bf16)
   std::vector<Tensor> o_z, o_y, o_act, o_el, o_er, o_alpha;  // origat, per layer
   Tensor skip_lin, skip_out;  // config.linear_skip: x W + b, and the network's output plus it
 };
@@ -300,12 +308,7 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
     bool even = g.width() % 2 == 0;
     for (std::int64_t w : M.module_in) even = even && w % 2 == 0;
     if (M.device == Device::cpu && M.precision == Precision::bf16 && even)
-      for (const Tensor& t : B.mod) {
-        Shadow s;
-        s.ld = (t.cols() / 2 + 15) / 16 * 16;  // 64-byte aligned rows
-        s.words.assign(std::size_t((n_ + 24) * s.ld), 0u);  // 24 rows more (gemm_prepacked on Bf16Rows)
-        B.mod_bf16.push_back(std::move(s));
-      }
+      for (const Tensor& t : B.mod) B.mod_bf16.push_back(shadow_for(n_, t.cols()));
     if (M.device == Device::cpu) {
       B.zs = be.empty(n_, g.width());
       B.z = B.zs.cols_slice(0, g.kf());
@@ -320,6 +323,7 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
     for (std::size_t k = 0; k < M.head.size(); ++k) {
       B.h_lin.push_back(be.empty(n_, M.head[k].W.cols()));
       B.h_act.push_back(M.head[k].act != Activation::identity ? be.empty(n_, M.head[k].W.cols()) : Tensor{});
+      if (!B.mod_bf16.empty() && k + 1 < M.head.size()) B.head_bf16.push_back(shadow_for(n_, M.head[k].W.cols()));
     }
   }
   if (M.has_skip) {
@@ -355,20 +359,30 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
                const cpu::Bf16Rows* xw = nullptr, std::uint32_t* out_words = nullptr, std::int64_t out_ld = 0) {
   const std::int64_t kf = s.kf();
   const bool cpu = be.device() == Device::cpu;
-  if (xw)
-    cpu::gemm_prepacked(*xw, s.Wp, zs);
-  else if (cpu)
-    cpu::gemm_prepacked(x, s.Wp, zs);
-  else
-    be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
-  be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
-  be.gat_fused_additive_forward(g, z, el, er, s.slope, both.cols_slice(0, kf), alpha);
-  if (out_words) {  // reads the self stream's product where the GEMM left it
-    cpu::gat_epilogue_bf16(both.cols_slice(0, kf), s.self_width > 0 ? zs.cols_slice(kf, kf + s.self_width) : Tensor{},
-                           s.self_width > 0 ? s.self_b : Tensor{}, s.bn ? s.bn_mean : Tensor{}, s.bn_scale,
-                           s.bn_shift, out_words, out_ld);
+  if (xw) {
+    // The attention projection of each row block of z as soon as the product has it (still in cache).
+    struct Proj {
+      const Tensor &z, &a_dst, &a_src, &el, &er;
+    } proj{z, s.att_dst, s.att_src, el, er};
+    cpu::gemm_prepacked(*xw, s.Wp, zs, [](void* c, std::int64_t i0, std::int64_t rows) {
+      const Proj& p = *static_cast<const Proj*>(c);
+      cpu::attention_projection_forward_rows(p.z, p.a_dst, p.a_src, p.el, p.er, i0, i0 + rows);
+    }, &proj);
+  } else {
+    if (cpu)
+      cpu::gemm_prepacked(x, s.Wp, zs);
+    else
+      be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
+    be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
+  }
+  if (out_words) {  // attention and epilogue in one pass; reads the self stream's product where the GEMM left it
+    cpu::gat_attention_epilogue_bf16(g, z, el, er, s.slope, alpha,
+                                     s.self_width > 0 ? zs.cols_slice(kf, kf + s.self_width) : Tensor{},
+                                     s.self_width > 0 ? s.self_b : Tensor{}, s.bn ? s.bn_mean : Tensor{}, s.bn_scale,
+                                     s.bn_shift, out_words, out_ld);
     return;
   }
+  be.gat_fused_additive_forward(g, z, el, er, s.slope, both.cols_slice(0, kf), alpha);
   if (s.self_width > 0) {
     const Tensor self = both.cols_slice(kf, kf + s.self_width);
     if (cpu)
@@ -473,9 +487,19 @@ const Tensor& DeployPlan::run() {
                   shadows ? B.mod_bf16[m + 1].words.data() : nullptr, shadows ? B.mod_bf16[m + 1].ld : 0);
       }
     }
+    bool y_in_yw = shadows;  // y's bf16 rows are yw
     for (std::size_t k = 0; k < M.head.size(); ++k) {
-      dense_step(be, M.head[k], y, B.h_lin[k], B.h_act[k], shadows && k == 0 ? &yw : nullptr);
+      if (y_in_yw && k + 1 < M.head.size() && M.head[k].act == Activation::tanh) {
+        // A hidden layer's output goes only to its bf16 rows (the next product's operand).
+        Shadow& h = B.head_bf16[k];
+        cpu::gemm_prepacked_bias_act_bf16(yw, M.head[k].Wp, M.head[k].b, Activation::tanh, B.h_lin[k],
+                                          h.words.data(), h.ld);
+        yw = shadow_rows(h, n_, 0, M.head[k].W.cols());
+        continue;
+      }
+      dense_step(be, M.head[k], y, B.h_lin[k], B.h_act[k], y_in_yw ? &yw : nullptr);
       y = M.head[k].act != Activation::identity ? B.h_act[k] : B.h_lin[k];
+      y_in_yw = false;
     }
     out = y;
   }
