@@ -61,6 +61,30 @@ double max_abs_diff(const Tensor& a, const Tensor& b) {
   return m;
 }
 
+// A nonlinear target of the wave features (fixtures::wave_sample): the
+// linear fit leaves a residual the graph part has to learn. Fits `m`'s skip,
+// trains `epochs` full-batch epochs; {eval MSE at the fit, after training}.
+std::pair<double, double> train_from_fit(Model& m, int epochs, const Normaliser& norm, const std::vector<Sample>& data) {
+  const LinearMap f = fit_linear_skip(m, data, norm);
+  INFO("linear fit MSE " << f.mse_after << " of " << f.mse_before);
+  REQUIRE(f.mse_after > 0.01 * f.mse_before);  // not linear: something left for the network
+  REQUIRE(f.mse_after < f.mse_before);
+  TrainOptions o = TrainOptions::defaults_for(m.config());
+  o.sampling = Sampling::full;
+  o.batch_size = 3;
+  o.lr = 3e-3f;
+  Trainer t(m, o, norm);
+  const double start = t.evaluate(data);
+  // evaluate() averages per sample, the fit over all vertices: close, not equal.
+  CHECK(start == Approx(f.mse_after).epsilon(0.25));
+  for (int e = 0; e < epochs; ++e) t.run_epoch(data);
+  return {start, t.evaluate(data)};
+}
+
+std::vector<Sample> wave_data() {
+  return {fixtures::wave_sample(8, 6, 0.f), fixtures::wave_sample(8, 6, 0.6f), fixtures::wave_sample(7, 6, 1.2f)};
+}
+
 }  // namespace
 
 TEST_CASE("linear_skip: a configuration key, off by default and for configurations written before it") {
@@ -136,31 +160,15 @@ TEST_CASE("linear_skip: finite-difference gradients through the skip and the res
 }
 
 TEST_CASE("linear_skip: checkpoints keep the skip, and training from the fit ends below the linear fit") {
-  // A nonlinear target of the wave features (fixtures::wave_sample): the
-  // linear fit leaves a residual the graph part has to learn.
-  std::vector<Sample> data = {fixtures::wave_sample(8, 6, 0.f), fixtures::wave_sample(8, 6, 0.6f),
-                              fixtures::wave_sample(7, 6, 1.2f)};
+  const std::vector<Sample> data = wave_data();
   const Normaliser norm = Normaliser::fit(data, true);
   auto m = make_model(small_skip_config(), 7);
-  const LinearMap f = fit_linear_skip(*m, data, norm);
-  INFO("linear fit MSE " << f.mse_after << " of " << f.mse_before);
-  REQUIRE(f.mse_after > 0.01 * f.mse_before);  // not linear: something left for the network
-  REQUIRE(f.mse_after < f.mse_before);
-  TrainOptions o = TrainOptions::defaults_for(m->config());
-  o.sampling = Sampling::full;
-  o.batch_size = 3;
-  o.lr = 3e-3f;
-  Trainer t(*m, o, norm);
-  const double start = t.evaluate(data);
-  // evaluate() averages per sample, the fit over all vertices: close, not equal.
-  CHECK(start == Approx(f.mse_after).epsilon(0.25));
-  for (int e = 0; e < 150; ++e) t.run_epoch(data);
-  const double end = t.evaluate(data);
+  const auto [start, end] = train_from_fit(*m, 150, norm, data);
   INFO("eval MSE after training " << end << " (linear fit " << start << ")");
   CHECK(end < 0.5 * start);
 
   const std::string path = (std::filesystem::temp_directory_path() / "gatcore_linear_skip.gcm").string();
-  save_checkpoint(path, *m, norm, &t);
+  save_checkpoint(path, *m, norm);
   LoadedModel l = load_checkpoint(path);
   CHECK(l.model->config().linear_skip);
   CHECK(l.model->registry().find_param("skip.W")->value().to_vector() ==
@@ -213,20 +221,10 @@ TEST_CASE("linear_skip on Ori.GAT (the distillation student): zero start, the fi
     CHECK(last_moves);
   }
   // Nonlinear target: training from the fit ends below it.
-  std::vector<Sample> data = {fixtures::wave_sample(8, 6, 0.f), fixtures::wave_sample(8, 6, 0.6f),
-                              fixtures::wave_sample(7, 6, 1.2f)};
+  const std::vector<Sample> data = wave_data();
   const Normaliser norm = Normaliser::fit(data, true);
   auto m = make_model(c, 7);
-  const LinearMap f = fit_linear_skip(*m, data, norm);
-  REQUIRE(f.mse_after > 0.01 * f.mse_before);
-  TrainOptions o = TrainOptions::defaults_for(m->config());
-  o.sampling = Sampling::full;
-  o.batch_size = 3;
-  o.lr = 3e-3f;
-  Trainer t(*m, o, norm);
-  const double start = t.evaluate(data);
-  for (int e = 0; e < 200; ++e) t.run_epoch(data);
-  const double end = t.evaluate(data);
+  const auto [start, end] = train_from_fit(*m, 200, norm, data);
   INFO("Ori.GAT eval MSE after training " << end << " (linear fit " << start << ")");
   CHECK(end < 0.7 * start);
 }
