@@ -95,7 +95,8 @@ int run(const DeformArgs& a) {
     const BonePresence presence = checkpoint_bone_presence(lm.file, model_path, bones.size());
     const std::string w = unseen_absent_bones_warning(in, unseen_absent_bones(d.mapping, bones, presence), presence);
     if (!w.empty())
-      std::fprintf(stderr, "gat deform: %s, or use a model trained with --joint-columns nearest:K (any skeleton).\n",
+      std::fprintf(stderr, "gat deform: %s. Name the matching joints with --alias JOINT=BONE, or use a model trained with "
+                   "--joint-columns nearest:K (any skeleton).\n",
                    w.c_str());
   }
   BakedFrames baked;

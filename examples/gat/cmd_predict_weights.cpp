@@ -143,8 +143,8 @@ int run(const PredictArgs& a) {
   const BonePresence presence = checkpoint_bone_presence(lm.file, model_path, bones.size());
   const std::string w = unseen_absent_bones_warning(in, unseen_absent_bones(p.mapping, bones, presence), presence);
   if (!w.empty())
-    std::fprintf(stderr, "gat predict-weights: %s, or predict with a skinweights-any model or --method bone-heat (any "
-                 "skeleton).\n",
+    std::fprintf(stderr, "gat predict-weights: %s. Name the matching joints with --alias JOINT=BONE, or predict with a "
+                 "skinweights-any model or --method bone-heat (any skeleton).\n",
                  w.c_str());
   return 0;
 }

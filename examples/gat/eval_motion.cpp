@@ -164,6 +164,24 @@ int gat::eval_motion(const EvalMotionArgs& args) {
   const auto& chars = td.part(dpart);
   GATCORE_CHECK(!chars.empty(), data, " has no ", part, " characters");
 
+  // A bone-column model on a character lacking bones all its training
+  // characters had reads inputs it never saw (character_model.hpp): say so
+  // beside the numbers it explains.
+  for (const auto& m : models_) {
+    if (m.nearest > 0) continue;
+    const BonePresence presence = checkpoint_bone_presence(m.l.file, m.file, td.super.names.size());
+    for (std::int32_t c : chars) {
+      BoneMapping has;  // which of the super skeleton's bones this character has (joint indices unused)
+      for (std::uint8_t x : td.super.mask[std::size_t(c)]) has.bone_to_joint.push_back(x ? 0 : -1);
+      const std::string w = unseen_absent_bones_warning(
+          character_label(td.description.characters[std::size_t(c)]), unseen_absent_bones(has, td.super.names, presence),
+          presence);
+      if (!w.empty())
+        std::fprintf(stderr, "gat eval: %s (model %s; a model trained with --joint-columns nearest:K has no such columns).\n",
+                     w.c_str(), m.label.c_str());
+    }
+  }
+
   std::vector<std::string> methods = {"LBS", "DQS"};
   for (const auto& m : models_) methods.push_back(m.label);
   // The linear probe: least squares on the training characters' epoch-0

@@ -193,7 +193,7 @@ std::string unseen_absent_bones_warning(const std::string& what, const std::vect
          std::to_string(presence.count.size()) + " bones that all " + std::to_string(presence.characters) +
          " training characters had (" + names +
          "): their columns read 'absent', an input this model never saw, which can spoil its output on the whole "
-         "mesh. Name the matching joints with --alias JOINT=BONE";
+         "mesh";
 }
 
 }  // namespace gatcore::character

@@ -76,9 +76,8 @@ std::string format_bone_presence(const std::vector<int>& count);
 // Empty when the presence is not recorded.
 std::vector<std::string> unseen_absent_bones(const BoneMapping& m, const std::vector<std::string>& bones,
                                              const BonePresence& presence);
-// A warning for `what` naming up to 8 of those bones, ending in "Name the
-// matching joints with --alias JOINT=BONE" (the caller adds its other
-// remedy), or "" when `absent` is empty.
+// A warning for `what` naming up to 8 of those bones (the caller adds the
+// remedies its command offers), or "" when `absent` is empty.
 std::string unseen_absent_bones_warning(const std::string& what, const std::vector<std::string>& absent,
                                         const BonePresence& presence);
 
