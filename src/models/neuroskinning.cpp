@@ -10,6 +10,10 @@
 // copy and the [n, global] broadcast (and their gradients) disappear. Same
 // parameters, same checkpoints; the sum is reassociated (float rounding only).
 // With task = displacement: out = 3, no softmax (DenseGATs' comparison).
+// With config.logit_prior (skinweights-any): logits = classifier output +
+// Batch::prior, the classifier's last Linear starting at zero, so the
+// untrained model is softmax(prior) (bone heat over each vertex's candidate
+// bones) and training learns corrections (in log space) to the prior.
 #include "gatcore/backend.hpp"
 #include "gatcore/nn/gc_unit.hpp"
 #include "gatcore/nn/mlp.hpp"
@@ -39,6 +43,14 @@ class NeuroSkinning final : public Model {
       }
     }
     classifier_ = nn::Mlp(root.sub("classifier"), w + global_width_, c.classifier, c.out_dim, dl, init);
+    if (c.logit_prior) {
+      GATCORE_CHECK(c.task == Task::weights, "neuroskinning: logit_prior needs the weights task");
+      // The last layer's weight gradient (hidden^T · dL/dlogits) is not zero,
+      // so it leaves zero on the first step; the layers below start learning
+      // once it has.
+      classifier_.last.W.value().zero_();
+      classifier_.last.b.value().zero_();
+    }
   }
 
   std::vector<int> pool_sizes() const override {
@@ -63,7 +75,14 @@ class NeuroSkinning final : public Model {
     Var glob = segment_max(b.graph, global_.forward(y, training, rng_));  // [characters, global]
     for (std::size_t k = 1; k < gc_.size(); ++k)
       y = gc_[k].forward_into(b.graph, nbr(gc_[k].opt.pool_size), buf.cols_slice(0, gc_[k].out()));
-    return output(classify(b.graph, y, glob, training), b);
+    Var logits = classify(b.graph, y, glob, training);
+    if (cfg_.logit_prior) {
+      GATCORE_CHECK(b.prior.defined(), "neuroskinning: the model adds a log prior to its logits (logit_prior) and "
+                                       "the batch has none (a skinweights-any sample carries log bone heat)");
+      check_shape(b.prior, logits.rows(), logits.cols(), "batch prior");
+      logits = add(logits, Var(b.prior));
+    }
+    return output(logits, b);
   }
 
   // classifier_(concat(y, broadcast_segments(glob))) without building either.

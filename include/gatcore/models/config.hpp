@@ -44,6 +44,13 @@ struct ModelConfig {
   std::vector<std::int64_t> stage1{128, 64};
   std::vector<std::int64_t> gc_heads{4, 2, 2}, gc_dims{64, 64, 64}, gc_pool{16, 24, 64};
   bool pool = true;  // false = neuroskinning-nopool
+  // A log prior on the logits (skinweights-any): logits = classifier output +
+  // Batch::prior (the data's log prior per output column, e.g. log(bone heat
+  // weight + eps) of each candidate bone), and the classifier's last layer
+  // starts at zero, so the untrained model is the prior's softmax and
+  // training learns corrections to it. Configs written before the key
+  // existed read as off.
+  bool logit_prior = false;
   std::vector<std::int64_t> global_mlp{512, 1024};
   std::vector<std::int64_t> classifier{1024, 512};
   // FC baseline (NeuroSkinning Table 7)
