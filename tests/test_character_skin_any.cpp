@@ -35,7 +35,9 @@ PreparedCharacter procedural(ProceduralKind kind, std::uint32_t seed) {
 // The prior's model starts with a zero last layer (it is bone heat, whatever
 // the rest); tests of what the network does draw that layer at random.
 void randomise_last_layer(models::Model& m, std::uint32_t seed) {
-  const std::string last = "classifier." + std::to_string(m.config().classifier.size()) + ".";
+  const std::string last = m.config().pair_scorer.empty()
+                               ? "classifier." + std::to_string(m.config().classifier.size()) + "."
+                               : std::string("scorer.out.");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> U(-0.5f, 0.5f);
   int found = 0;
@@ -99,21 +101,31 @@ TEST_CASE("skinweights-any trains on characters with different bone counts in on
   std::vector<models::Sample> train{bone_candidate_sample(a, k), bone_candidate_sample(b, k)};
   CHECK(train[1].bone_mask.at(0, 1) == 1.0f);
   CHECK(train[1].bone_mask.at(0, 2) == 0.0f);
+  // Both scorers: the classifier's column per slot, and one MLP shared by
+  // every (vertex, candidate) pair.
+  const bool shared = GENERATE(false, true);
   models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
   cfg.stage1 = {32, 16};
   cfg.gc_dims = {16, 16, 16};
   cfg.global_mlp = {32};
   cfg.classifier = {32};
+  if (shared) {
+    cfg.pair_scorer = {16};
+    cfg.pair_features = kPairFeatures;
+  }
+  INFO("pair scorer " << shared);
   auto model = models::make_model(cfg, 3);
   REQUIRE(model->pool_sizes().empty());
   const models::Normaliser norm = models::Normaliser::fit(train, false);
   models::TrainOptions opt = models::TrainOptions::defaults_for(cfg);
   opt.batch_size = 2;  // both characters in one batch: per-character candidate masks, one softmax width
-  opt.sample_vertices = 256;
+  // Whole meshes: a random subset's induced graph has few edges and its max
+  // pool is not the whole mesh's, so evaluation (whole meshes) would lag.
+  opt.sampling = models::Sampling::full;
   opt.lr = 3e-3f;
   models::Trainer t(*model, opt, norm);
   const double before = t.evaluate(train);
-  for (int e = 0; e < 30; ++e) t.run_epoch(train);
+  for (int e = 0; e < 60; ++e) t.run_epoch(train);
   const double after = t.evaluate(train);
   INFO("KL before " << before << ", after " << after);
   CHECK(std::isfinite(after));
@@ -155,6 +167,12 @@ TEST_CASE("finite-difference gradients through a reduced skinweights-any, two bo
   cfg.gc_pool = {0, 0};  // no geodesic pooling (skinweights-any)
   cfg.global_mlp = {8};
   cfg.classifier = {8};
+  const bool shared = GENERATE(false, true);  // the shared pair scorer: 2 hidden layers, every slot
+  if (shared) {
+    cfg.pair_scorer = {6, 5};
+    cfg.pair_features = kPairFeatures;
+  }
+  INFO("pair scorer " << shared);
   REQUIRE(cfg.logit_prior);  // logits = network + log(bone heat + eps)
   auto model = models::make_model(cfg, 11);
   randomise_last_layer(*model, 13);  // zero, every layer below it would get a zero gradient
@@ -182,6 +200,11 @@ TEST_CASE("skinweights-any predicts the same weights whatever the joints are cal
   cfg.gc_dims = {8, 8, 8};
   cfg.global_mlp = {16};
   cfg.classifier = {16};
+  const bool shared = GENERATE(false, true);
+  if (shared) {
+    cfg.pair_scorer = {8};
+    cfg.pair_features = kPairFeatures;
+  }
   auto model = models::make_model(cfg, 5);
   randomise_last_layer(*model, 6);  // not just bone heat: the network's own scores too
   const PreparedCharacter pc = prepare_character(original, DeltaMushParams{0, 0.5f});
@@ -211,7 +234,9 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
   // The log prior and the zero last layer: softmax(log(h + eps)) over the
   // valid candidates, h bone heat's unpruned weight of the candidate joint
   // (computed here from bone_heat_weights, not read back from the features).
+  const bool shared = GENERATE(false, true);
   for (const int k : {4, 8}) {
+    INFO("k " << k << ", pair scorer " << shared);
     const PreparedCharacter pc = procedural(ProceduralKind::humanoid, 6);
     BoneCandidates c;
     const models::Sample s = bone_candidate_sample(pc, k, &c);
@@ -220,6 +245,10 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
     cfg.gc_dims = {8, 8, 8};
     cfg.global_mlp = {16};
     cfg.classifier = {16};
+    if (shared) {
+      cfg.pair_scorer = {8};
+      cfg.pair_features = kPairFeatures;
+    }
     auto model = models::make_model(cfg, 9);
     const models::Normaliser norm = models::Normaliser::fit({s}, false);
     const Tensor y = models::predict(*model, s, norm, 0);
@@ -280,4 +309,10 @@ TEST_CASE("a batch takes every sample's log prior or none", "[skin_any]") {
   // Configurations round-trip the key; ones written before it read as off.
   CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
   CHECK_FALSE(models::ModelConfig::from_text("name = skinweights-any\n").logit_prior);
+  cfg.pair_scorer = {8, 4};
+  cfg.pair_features = kPairFeatures;
+  CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
+  // A pair scorer needs the slots' columns inside the input.
+  cfg.pair_features = 100;
+  CHECK_THROWS_WITH(models::make_model(cfg, 1), Catch::Contains("pair_features"));
 }

@@ -52,6 +52,7 @@ struct TrainArgs {
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
   long val_every = 1, sample_vertices = 0;
+  std::vector<std::int64_t> pair_scorer;
   bool linear_skip = false;
   gat::CommonOptions common;
 };
@@ -123,6 +124,11 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "for its extension); the losses also go to its .csv");
   c.add_option("--val-every", a->val_every, "validate every K-th epoch and after the last one")
       ->check(int_in(1, 1000000))->capture_default_str();
+  c.add_option("--pair-scorer", a->pair_scorer,
+               "skinweights-any: score every (vertex, candidate bone) with one shared MLP of these hidden widths "
+               "(e.g. 64) from the vertex's context and the pair's columns, instead of a classifier output column "
+               "per candidate slot")
+      ->delimiter(',')->check(int_in(1, 4096));
   c.add_option("--keep-best", a->keep_best,
                "also write the checkpoint of the epoch with the lowest validation loss so far to this path (--out "
                "stays the latest epoch, to resume from; a resumed run continues from the loss history's best)");
@@ -243,6 +249,11 @@ int run_train(TrainArgs a) {
       }
       cfg.in_dim = character::bone_candidate_feature_dim(character::kDefaultCandidates);
       cfg.out_dim = character::kDefaultCandidates;
+      cfg.pair_scorer = a.pair_scorer;
+      cfg.pair_features = character::kPairFeatures;
+    } else if (!a.pair_scorer.empty()) {
+      std::fprintf(stderr, "gat train: --pair-scorer applies to skinweights-any, not %s\n", cfg.name.c_str());
+      return 2;
     }
     if (!loss.empty()) {
       if (cfg.task == Task::weights) {
@@ -270,6 +281,11 @@ int run_train(TrainArgs a) {
   if (!resume.empty() && !loss.empty() && loss != displacement_loss_name(cfg.loss)) {
     std::fprintf(stderr, "gat train: %s was trained with the %s loss; a resumed run keeps it (drop --loss %s)\n",
                  resume.c_str(), displacement_loss_name(cfg.loss), loss.c_str());
+    return 2;
+  }
+  if (!resume.empty() && !a.pair_scorer.empty() && a.pair_scorer != cfg.pair_scorer) {
+    std::fprintf(stderr, "gat train: %s has %s; a resumed run keeps its architecture (drop --pair-scorer)\n",
+                 resume.c_str(), cfg.pair_scorer.empty() ? "no pair scorer" : "another pair scorer");
     return 2;
   }
   const bool any_skeleton = cfg.name == "skinweights-any";

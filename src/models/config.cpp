@@ -160,6 +160,8 @@ const std::vector<Field>& fields() {
       list_field("gc_pool", &ModelConfig::gc_pool),
       bool_field("pool", &ModelConfig::pool),
       bool_field("logit_prior", &ModelConfig::logit_prior),
+      list_field("pair_scorer", &ModelConfig::pair_scorer),
+      int_field("pair_features", &ModelConfig::pair_features),
       list_field("global_mlp", &ModelConfig::global_mlp),
       list_field("classifier", &ModelConfig::classifier),
       list_field("fc", &ModelConfig::fc),

@@ -51,6 +51,15 @@ struct ModelConfig {
   // training learns corrections to it. Configs written before the key
   // existed read as off.
   bool logit_prior = false;
+  // A shared per-(vertex, output slot) scorer instead of the classifier's
+  // last layer (skinweights-any; RigNet's design): the input's last
+  // out_dim * pair_features columns are pair_features columns per slot
+  // (a vertex's candidate bones), and one MLP of these hidden widths scores
+  // every slot from the vertex's context (the classifier's hidden output)
+  // and that slot's columns, the same weights for every slot. Empty = the
+  // classifier's per-slot output layer (configs before the key: empty).
+  std::vector<std::int64_t> pair_scorer;
+  int pair_features = 0;
   std::vector<std::int64_t> global_mlp{512, 1024};
   std::vector<std::int64_t> classifier{1024, 512};
   // FC baseline (NeuroSkinning Table 7)
