@@ -47,7 +47,8 @@ void on_sigint(int) {
 }
 
 struct TrainArgs {
-  std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss, joint_columns, keep_best;
+  std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss, joint_columns, keep_best,
+              sampling;
   long epochs = 10, seed = 0, batch = 0, samples = 64;
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
@@ -132,6 +133,11 @@ gat::Runner gat::setup_train(CLI::App& gat) {
   c.add_option("--keep-best", a->keep_best,
                "also write the checkpoint of the epoch with the lowest validation loss so far to this path (--out "
                "stays the latest epoch, to resume from; a resumed run continues from the loss history's best)");
+  c.add_option("--sampling", a->sampling,
+               "which vertices of a character a training sample takes: random (NeuroSkinning's), consecutive "
+               "(a window of vertex ids, DenseGATs'; default of the other models) or full (every vertex: the mesh "
+               "graph and the per-character max pool see what they see at inference; --sample-vertices unused)")
+      ->check(CLI::IsMember({"random", "consecutive", "full"}));
   c.add_option("--sample-vertices", a->sample_vertices, "vertices per training sample (default: paper, 1000 or 2048)")
       ->check(int_in(1, 100000000));
   add_quiet(c, a->common);
@@ -193,6 +199,7 @@ int run_train(TrainArgs a) {
       samples = std::stol(md.at("samples"));
       batch = std::stol(md.at("batch"));
       if (md.count("sample_vertices")) sample_vertices = std::stol(md.at("sample_vertices"));
+      if (md.count("sampling")) a.sampling = md.at("sampling");
     }
     if (md.count("data_path")) {
       if (data.empty()) data = md.at("data_path");
@@ -329,6 +336,8 @@ int run_train(TrainArgs a) {
   opt.lr = lr;
   if (batch > 0) opt.batch_size = int(batch);
   if (sample_vertices > 0) opt.sample_vertices = sample_vertices;
+  if (!a.sampling.empty())
+    opt.sampling = a.sampling == "full" ? Sampling::full : a.sampling == "random" ? Sampling::random : Sampling::consecutive;
   // Parameters are drawn (or loaded) on the CPU and moved before the
   // optimiser allocates its moments next to them.
   model->to(dev);
@@ -354,7 +363,10 @@ int run_train(TrainArgs a) {
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
                                            {"samples", std::to_string(samples)},
                                            {"batch", std::to_string(opt.batch_size)},
-                                           {"sample_vertices", std::to_string(opt.sample_vertices)}};
+                                           {"sample_vertices", std::to_string(opt.sample_vertices)},
+                                           {"sampling", opt.sampling == Sampling::full     ? "full"
+                                                        : opt.sampling == Sampling::random ? "random"
+                                                                                            : "consecutive"}};
   // The node features a character command (predict-weights, deform) must
   // compute for this model (character_model.hpp).
   extra["features"] = td ? (any_skeleton ? "bone-candidates" : cfg.task == Task::weights ? "neuroskinning" : "densegats")
