@@ -11,6 +11,7 @@
 #include "model_gradcheck.hpp"
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/procedural.hpp"
+#include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
 #include "gatcore/error.hpp"
@@ -29,6 +30,25 @@ PreparedCharacter procedural(ProceduralKind kind, std::uint32_t seed) {
   o.ring_segments = 8;
   o.rings_per_bone = 3;
   return prepare_character(procedural_character(o), DeltaMushParams{0, 0.5f});
+}
+
+// The prior's model starts with a zero last layer (it is bone heat, whatever
+// the rest); tests of what the network does draw that layer at random.
+void randomise_last_layer(models::Model& m, std::uint32_t seed) {
+  const std::string last = m.config().pair_scorer.empty()
+                               ? "classifier." + std::to_string(m.config().classifier.size()) + "."
+                               : std::string("scorer.out.");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(-0.5f, 0.5f);
+  int found = 0;
+  for (const auto& p : m.registry().params) {
+    if (p.name.rfind(last, 0) != 0) continue;
+    ++found;
+    const Tensor& x = p.var.value();
+    for (std::int64_t i = 0; i < x.rows(); ++i)
+      for (std::int64_t j = 0; j < x.cols(); ++j) x.at(i, j) = U(rng);
+  }
+  REQUIRE(found == 2);  // W and b
 }
 
 }  // namespace
@@ -58,7 +78,7 @@ TEST_CASE("bone candidates of a two-bone tube: nearest first, padded past the jo
     CHECK(f[kPairFeatures] > f[0]);
     // Bone length: root 1 (world); bone1, a leaf, half its parent's.
     CHECK(f[5] == Approx((y < 1.0f ? 1.0f : 0.5f) * s).margin(1e-4));
-    CHECK(f[9] > 0.6f);                                            // bone heat: mostly the nearest bone
+    CHECK(f[kBoneHeatPairColumn] > 0.6f);                          // bone heat: mostly the nearest bone
     CHECK(f[9] + f[kPairFeatures + 9] == Approx(1.0f).margin(1e-4));  // two bones: heat sums to 1
   }
   // Targets: the artist's weights of the candidates (blend 0: one-hot).
@@ -81,21 +101,31 @@ TEST_CASE("skinweights-any trains on characters with different bone counts in on
   std::vector<models::Sample> train{bone_candidate_sample(a, k), bone_candidate_sample(b, k)};
   CHECK(train[1].bone_mask.at(0, 1) == 1.0f);
   CHECK(train[1].bone_mask.at(0, 2) == 0.0f);
+  // Both scorers: the classifier's column per slot, and one MLP shared by
+  // every (vertex, candidate) pair.
+  const bool shared = GENERATE(false, true);
   models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
   cfg.stage1 = {32, 16};
   cfg.gc_dims = {16, 16, 16};
   cfg.global_mlp = {32};
   cfg.classifier = {32};
+  if (shared) {
+    cfg.pair_scorer = {16};
+    cfg.pair_features = kPairFeatures;
+  }
+  INFO("pair scorer " << shared);
   auto model = models::make_model(cfg, 3);
   REQUIRE(model->pool_sizes().empty());
   const models::Normaliser norm = models::Normaliser::fit(train, false);
   models::TrainOptions opt = models::TrainOptions::defaults_for(cfg);
   opt.batch_size = 2;  // both characters in one batch: per-character candidate masks, one softmax width
-  opt.sample_vertices = 256;
+  // Whole meshes: a random subset's induced graph has few edges and its max
+  // pool is not the whole mesh's, so evaluation (whole meshes) would lag.
+  opt.sampling = models::Sampling::full;
   opt.lr = 3e-3f;
   models::Trainer t(*model, opt, norm);
   const double before = t.evaluate(train);
-  for (int e = 0; e < 30; ++e) t.run_epoch(train);
+  for (int e = 0; e < 60; ++e) t.run_epoch(train);
   const double after = t.evaluate(train);
   INFO("KL before " << before << ", after " << after);
   CHECK(std::isfinite(after));
@@ -137,11 +167,20 @@ TEST_CASE("finite-difference gradients through a reduced skinweights-any, two bo
   cfg.gc_pool = {0, 0};  // no geodesic pooling (skinweights-any)
   cfg.global_mlp = {8};
   cfg.classifier = {8};
+  const bool shared = GENERATE(false, true);  // the shared pair scorer: 2 hidden layers, every slot
+  if (shared) {
+    cfg.pair_scorer = {6, 5};
+    cfg.pair_features = kPairFeatures;
+  }
+  INFO("pair scorer " << shared);
+  REQUIRE(cfg.logit_prior);  // logits = network + log(bone heat + eps)
   auto model = models::make_model(cfg, 11);
+  randomise_last_layer(*model, 13);  // zero, every layer below it would get a zero gradient
   const models::Normaliser norm = models::Normaliser::fit(data, false);
   std::vector<const models::Sample*> p{&data[0], &data[1]};
   const models::Batch batch = models::make_batch(p, {{}, {}}, norm, model->pool_sizes());
   REQUIRE(batch.mask.defined());
+  REQUIRE(batch.prior.defined());
   const auto e = fixtures::model_gradcheck(*model, batch);
   CHECK(e.size() >= 3 * model->registry().params.size());
 }
@@ -161,7 +200,13 @@ TEST_CASE("skinweights-any predicts the same weights whatever the joints are cal
   cfg.gc_dims = {8, 8, 8};
   cfg.global_mlp = {16};
   cfg.classifier = {16};
+  const bool shared = GENERATE(false, true);
+  if (shared) {
+    cfg.pair_scorer = {8};
+    cfg.pair_features = kPairFeatures;
+  }
   auto model = models::make_model(cfg, 5);
+  randomise_last_layer(*model, 6);  // not just bone heat: the network's own scores too
   const PreparedCharacter pc = prepare_character(original, DeltaMushParams{0, 0.5f});
   const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k)}, false);
   const WeightPrediction p = predict_skin_weights_any(*model, norm, original, 3);
@@ -183,4 +228,91 @@ TEST_CASE("skinweights-any predicts the same weights whatever the joints are cal
   // Another model is refused, naming it.
   auto other = models::make_model(models::ModelConfig::defaults("fc", bone_candidate_feature_dim(k), k), 1);
   CHECK_THROWS_AS(predict_skin_weights_any(*other, norm, original, 3), InvalidArgument);
+}
+
+TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates", "[skin_any]") {
+  // The log prior and the zero last layer: softmax(log(h + eps)) over the
+  // valid candidates, h bone heat's unpruned weight of the candidate joint
+  // (computed here from bone_heat_weights, not read back from the features).
+  const bool shared = GENERATE(false, true);
+  for (const int k : {4, 8}) {
+    INFO("k " << k << ", pair scorer " << shared);
+    const PreparedCharacter pc = procedural(ProceduralKind::humanoid, 6);
+    BoneCandidates c;
+    const models::Sample s = bone_candidate_sample(pc, k, &c);
+    models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+    cfg.stage1 = {16, 8};
+    cfg.gc_dims = {8, 8, 8};
+    cfg.global_mlp = {16};
+    cfg.classifier = {16};
+    if (shared) {
+      cfg.pair_scorer = {8};
+      cfg.pair_features = kPairFeatures;
+    }
+    auto model = models::make_model(cfg, 9);
+    const models::Normaliser norm = models::Normaliser::fit({s}, false);
+    const Tensor y = models::predict(*model, s, norm, 0);
+    BoneHeatParams hp;
+    hp.max_influences = 64;
+    hp.min_weight = 0.0f;
+    const SkinWeights heat = bone_heat_weights(pc.character, hp);
+    const std::int64_t n = pc.character.mesh.num_vertices();
+    REQUIRE(y.rows() == n);
+    int compared = 0;
+    for (std::int64_t v = 0; v < n; ++v) {
+      std::vector<double> h(std::size_t(k), 0.0);
+      double sum = 0;
+      for (int i = 0; i < c.valid; ++i) {
+        for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e)
+          if (heat.joint[e] == c.joint[std::size_t(v * k + i)]) h[std::size_t(i)] = heat.weight[e];
+        sum += h[std::size_t(i)];
+      }
+      // Where bone heat puts most of the vertex outside its candidates, the
+      // eps floor is not small next to what is left: compare where it is.
+      if (sum < 0.5) continue;
+      ++compared;
+      for (int i = 0; i < c.valid; ++i)
+        CHECK(y.at(v, i) == Approx(h[std::size_t(i)] / sum).margin(2.0 * k * kBoneHeatPriorEps / sum + 1e-5));
+    }
+    INFO("k " << k << ": " << compared << " of " << n << " vertices compared");
+    CHECK(compared > 0.95 * double(n));
+    // Training moves it: the gradient reaches the zero last layer.
+    models::TrainOptions opt = models::TrainOptions::defaults_for(cfg);
+    opt.batch_size = 1;
+    opt.sample_vertices = 256;
+    models::Trainer t(*model, opt, norm);
+    t.run_epoch({s});
+    const Tensor z = models::predict(*model, s, norm, 0);
+    double moved = 0;
+    for (std::int64_t v = 0; v < n; ++v)
+      for (int i = 0; i < k; ++i) moved = std::max(moved, double(std::abs(z.at(v, i) - y.at(v, i))));
+    CHECK(moved > 1e-4);
+  }
+}
+
+TEST_CASE("a batch takes every sample's log prior or none", "[skin_any]") {
+  const PreparedCharacter a = procedural(ProceduralKind::humanoid, 1);
+  const models::Sample with = bone_candidate_sample(a, 4);
+  models::Sample without = with;
+  without.prior = Tensor{};
+  CHECK_THROWS_AS(models::make_batch({&with, &without}, {{}, {}}, {}, {}), InvalidArgument);
+  CHECK_THROWS_AS(models::make_batch({&without, &with}, {{}, {}}, {}, {}), InvalidArgument);
+  const std::vector<std::vector<std::int32_t>> two_vertices{{0, 5}};
+  const models::Batch b = models::make_batch({&with}, two_vertices, {}, {});
+  REQUIRE(b.prior.rows() == 2);
+  for (int i = 0; i < 4; ++i) CHECK(b.prior.at(1, i) == with.prior.at(5, i));
+  // A prior model refuses a batch without one, naming what is missing.
+  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(4), 4);
+  auto model = models::make_model(cfg, 1);
+  const models::Batch nb = models::make_batch({&without}, {{}}, {}, {});
+  CHECK_THROWS_WITH(model->forward(nb, false), Catch::Contains("log prior"));
+  // Configurations round-trip the key; ones written before it read as off.
+  CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
+  CHECK_FALSE(models::ModelConfig::from_text("name = skinweights-any\n").logit_prior);
+  cfg.pair_scorer = {8, 4};
+  cfg.pair_features = kPairFeatures;
+  CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
+  // A pair scorer needs the slots' columns inside the input.
+  cfg.pair_features = 100;
+  CHECK_THROWS_WITH(models::make_model(cfg, 1), Catch::Contains("pair_features"));
 }

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <random>
 
 #include "gatcore/models/train.hpp"
@@ -23,6 +24,20 @@ Batch full_batch(const Model& m, const std::vector<Sample>& s, const Normaliser&
   return make_batch(p, sel, norm, m.pool_sizes());
 }
 
+// A model with a log prior on its logits (skinweights-any: log bone heat per
+// candidate) needs one in every sample: here the log of random weights.
+std::vector<Sample> for_model(const ModelConfig& cfg, std::vector<Sample> data) {
+  if (!cfg.logit_prior) return data;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> U(0.05f, 1.f);
+  for (Sample& x : data) {
+    x.prior = Tensor::empty(x.features.rows(), cfg.out_dim);
+    for (std::int64_t i = 0; i < x.prior.rows(); ++i)
+      for (std::int64_t j = 0; j < x.prior.cols(); ++j) x.prior.at(i, j) = std::log(U(rng));
+  }
+  return data;
+}
+
 std::int64_t out_dim_for(const std::string& name) {
   return ModelConfig::defaults(name, 9).task == Task::weights ? 5 : 3;
 }
@@ -36,7 +51,7 @@ TEST_CASE("every model runs forward and backward at the papers' defaults") {
     INFO("model " << name);
     ModelConfig cfg = ModelConfig::defaults(name, 9, out_dim_for(name));
     auto m = make_model(cfg, 1);
-    const auto& data = cfg.task == Task::weights ? w : s;
+    const std::vector<Sample> data = for_model(cfg, cfg.task == Task::weights ? w : s);
     Batch b = full_batch(*m, data);
     Var y = m->forward(b, true);
     CHECK(y.rows() == 80 + 63);
@@ -182,7 +197,7 @@ TEST_CASE("BatchNorm folding leaves every model's eval outputs unchanged") {
     INFO("model " << name);
     ModelConfig cfg = ModelConfig::defaults(name, 9, out_dim_for(name));
     auto m = make_model(cfg, 2);
-    const auto& data = cfg.task == Task::weights ? w : s;
+    const std::vector<Sample> data = for_model(cfg, cfg.task == Task::weights ? w : s);
     Normaliser norm = Normaliser::fit(data, cfg.task == Task::displacement);
     Trainer t(*m, TrainOptions{2, 1e-3f, Sampling::full}, norm);
     for (int e = 0; e < 3; ++e) t.run_epoch(data);  // non-trivial running stats and affine params
@@ -212,7 +227,7 @@ TEST_CASE("a short training run drives each model's loss well below its untraine
     const auto t0 = std::chrono::steady_clock::now();
     ModelConfig cfg = ModelConfig::defaults(name, 9, out_dim_for(name));
     auto m = make_model(cfg, 4);
-    const auto& data = cfg.task == Task::weights ? w : s;
+    const std::vector<Sample> data = for_model(cfg, cfg.task == Task::weights ? w : s);
     Normaliser norm = Normaliser::fit(data, cfg.task == Task::displacement);
     TrainOptions o = TrainOptions::defaults_for(cfg);
     o.sampling = Sampling::full;

@@ -5,7 +5,7 @@
 # accuracy, deformation error at the two worst of --poses random poses).
 #
 #   examples/experiments/unseen_skeletons.sh [--folds "women creatures khronos"] [--minutes M]
-#                                            [--seed S] [--out DIR] [--data DIR] [--gat BIN]
+#       [--sampling consecutive|random|full] [--pair-scorer W,...] [--seed S] [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
 # training family validates):
@@ -14,7 +14,13 @@
 #   khronos    train every Quaternius character, test the Khronos sample rigs
 # Methods: bone-heat (Baran & Popovic 2007; no training) and skinweights-any
 # (trained on the fold's training characters for --minutes of wall time, epochs
-# of 4 characters x 512 random vertices). The super-skeleton models
+# of 4 characters x 512 consecutive vertices (--sampling; full: whole meshes),
+# validated every epoch; the epoch of
+# the lowest validation loss is the one evaluated, gat train --keep-best).
+# skinweights-any starts as bone heat over each vertex's 8 nearest bones (its
+# logits' prior) and learns corrections to it; --pair-scorer W scores every
+# (vertex, candidate) with one shared MLP of hidden width W (gat train
+# --pair-scorer). The super-skeleton models
 # (neuroskinning, fc) cannot name the bones of an unseen family's skeleton, so
 # they are not run here (see neuroskinning.sh for them on shared skeletons).
 # modular_women/Adventurer.glb is skipped: its leg weights are NaN.
@@ -24,7 +30,7 @@ set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-folds="women creatures khronos" minutes=8 seed=7 poses=16
+folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer=
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/examples/gat"
@@ -35,10 +41,12 @@ while [ $# -gt 0 ]; do
     --minutes) minutes="${2:?--minutes needs a value}"; shift 2 ;;
     --seed) seed="${2:?--seed needs a value}"; shift 2 ;;
     --poses) poses="${2:?--poses needs a value}"; shift 2 ;;
+    --sampling) sampling="${2:?--sampling needs a value}"; shift 2 ;;
+    --pair-scorer) pair_scorer="${2:?--pair-scorer needs widths}"; shift 2 ;;
     --out) out="${2:?--out needs a directory}"; shift 2 ;;
     --data) data="${2:?--data needs a directory}"; shift 2 ;;
     --gat) gat="${2:?--gat needs a path}"; shift 2 ;;
-    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
     *) die "unknown option $1" ;;
   esac
 done
@@ -83,9 +91,12 @@ for fold in $folds; do
     --json "$dir/bone-heat.json" >"$dir/bone-heat.log" 2>&1 || { cat "$dir/bone-heat.log" >&2; die "bone heat on $fold failed"; }
   log "$fold: bone heat done"
   "$gat" train --model skinweights-any --data "$dir/dataset.json" --seed "$seed" --epochs 100000 --minutes "$minutes" \
-    --val-every 2 --batch 4 --sample-vertices 512 --out "$dir/skinweights-any.gcm" >"$dir/skinweights-any.train.log" 2>&1 \
+    --val-every 1 --batch 4 --sample-vertices 512 --sampling "$sampling" ${pair_scorer:+--pair-scorer "$pair_scorer"} \
+    --out "$dir/skinweights-any.gcm" \
+    --keep-best "$dir/skinweights-any.best.gcm" >"$dir/skinweights-any.train.log" 2>&1 \
     || { cat "$dir/skinweights-any.train.log" >&2; die "training on $fold failed"; }
-  "$gat" eval --model "$dir/skinweights-any.gcm" --poses "$poses" --seed "$seed" --json "$dir/skinweights-any.json" \
+  log "$fold: $(tail -n 1 "$dir/skinweights-any.train.log")"
+  "$gat" eval --model "$dir/skinweights-any.best.gcm" --poses "$poses" --seed "$seed" --json "$dir/skinweights-any.json" \
     >"$dir/skinweights-any.log" 2>&1 || { cat "$dir/skinweights-any.log" >&2; die "eval on $fold failed"; }
   log "$fold: skinweights-any $(grep -c '^epoch' "$dir/skinweights-any.train.log") epochs"
 done

@@ -47,11 +47,13 @@ void on_sigint(int) {
 }
 
 struct TrainArgs {
-  std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss, joint_columns;
+  std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss, joint_columns, keep_best,
+              sampling;
   long epochs = 10, seed = 0, batch = 0, samples = 64;
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
   long val_every = 1, sample_vertices = 0;
+  std::vector<std::int64_t> pair_scorer;
   bool linear_skip = false;
   gat::CommonOptions common;
 };
@@ -123,6 +125,19 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "for its extension); the losses also go to its .csv");
   c.add_option("--val-every", a->val_every, "validate every K-th epoch and after the last one")
       ->check(int_in(1, 1000000))->capture_default_str();
+  c.add_option("--pair-scorer", a->pair_scorer,
+               "skinweights-any: score every (vertex, candidate bone) with one shared MLP of these hidden widths "
+               "(e.g. 64) from the vertex's context and the pair's columns, instead of a classifier output column "
+               "per candidate slot")
+      ->delimiter(',')->check(int_in(1, 4096));
+  c.add_option("--keep-best", a->keep_best,
+               "also write the checkpoint of the epoch with the lowest validation loss so far to this path (--out "
+               "stays the latest epoch, to resume from; a resumed run continues from the loss history's best)");
+  c.add_option("--sampling", a->sampling,
+               "which vertices of a character a training sample takes: random (NeuroSkinning's), consecutive "
+               "(a window of vertex ids, DenseGATs'; default of the other models) or full (every vertex: the mesh "
+               "graph and the per-character max pool see what they see at inference; --sample-vertices unused)")
+      ->check(CLI::IsMember({"random", "consecutive", "full"}));
   c.add_option("--sample-vertices", a->sample_vertices, "vertices per training sample (default: paper, 1000 or 2048)")
       ->check(int_in(1, 100000000));
   add_quiet(c, a->common);
@@ -139,7 +154,7 @@ namespace {
 
 int run_train(TrainArgs a) {
   std::string model_name = a.model_name, out = a.out, resume = a.resume, data = a.data, task = a.task,
-              curve = a.curve, loss = a.loss, joint_columns = a.joint_columns;
+              curve = a.curve, loss = a.loss, joint_columns = a.joint_columns, keep_best = a.keep_best;
   long epochs = a.epochs, seed = a.seed, batch = a.batch, samples = a.samples < 0 ? 64 : a.samples;
   const bool samples_set = a.samples >= 0;
   const float lr = a.lr;
@@ -152,6 +167,17 @@ int run_train(TrainArgs a) {
   // Before any training: a curve that cannot be written would stop the run.
   if (const auto dir = std::filesystem::path(curve).parent_path(); !dir.empty() && !std::filesystem::is_directory(dir)) {
     std::fprintf(stderr, "gat train: --loss-curve %s: the directory %s does not exist\n", curve.c_str(),
+                 dir.string().c_str());
+    return 2;
+  }
+  if (!keep_best.empty() && std::filesystem::absolute(keep_best) == std::filesystem::absolute(out)) {
+    std::fprintf(stderr, "gat train: --keep-best %s is the --out path; give the best epoch its own file\n",
+                 keep_best.c_str());
+    return 2;
+  }
+  if (const auto dir = std::filesystem::path(keep_best).parent_path();
+      !keep_best.empty() && !dir.empty() && !std::filesystem::is_directory(dir)) {
+    std::fprintf(stderr, "gat train: --keep-best %s: the directory %s does not exist\n", keep_best.c_str(),
                  dir.string().c_str());
     return 2;
   }
@@ -173,6 +199,7 @@ int run_train(TrainArgs a) {
       samples = std::stol(md.at("samples"));
       batch = std::stol(md.at("batch"));
       if (md.count("sample_vertices")) sample_vertices = std::stol(md.at("sample_vertices"));
+      if (md.count("sampling")) a.sampling = md.at("sampling");
     }
     if (md.count("data_path")) {
       if (data.empty()) data = md.at("data_path");
@@ -229,6 +256,11 @@ int run_train(TrainArgs a) {
       }
       cfg.in_dim = character::bone_candidate_feature_dim(character::kDefaultCandidates);
       cfg.out_dim = character::kDefaultCandidates;
+      cfg.pair_scorer = a.pair_scorer;
+      cfg.pair_features = character::kPairFeatures;
+    } else if (!a.pair_scorer.empty()) {
+      std::fprintf(stderr, "gat train: --pair-scorer applies to skinweights-any, not %s\n", cfg.name.c_str());
+      return 2;
     }
     if (!loss.empty()) {
       if (cfg.task == Task::weights) {
@@ -258,6 +290,11 @@ int run_train(TrainArgs a) {
                  resume.c_str(), displacement_loss_name(cfg.loss), loss.c_str());
     return 2;
   }
+  if (!resume.empty() && !a.pair_scorer.empty() && a.pair_scorer != cfg.pair_scorer) {
+    std::fprintf(stderr, "gat train: %s has %s; a resumed run keeps its architecture (drop --pair-scorer)\n",
+                 resume.c_str(), cfg.pair_scorer.empty() ? "no pair scorer" : "another pair scorer");
+    return 2;
+  }
   const bool any_skeleton = cfg.name == "skinweights-any";
   if (td && !any_skeleton) {
     GATCORE_CHECK(cfg.in_dim == td->feature_dim(cfg.task) &&
@@ -282,6 +319,11 @@ int run_train(TrainArgs a) {
     std::fprintf(stderr, "gat train: %s has no training samples\n", data.c_str());
     return 2;
   }
+  if (!keep_best.empty() && val.empty()) {
+    std::fprintf(stderr, "gat train: --keep-best needs validation samples; %s has none\n",
+                 data.empty() ? "the embedded data" : data.c_str());
+    return 2;
+  }
   if (resume.empty()) norm = Normaliser::fit(train, cfg.task == Task::displacement);
   if (resume.empty() && cfg.linear_skip) {
     const LinearMap f = fit_linear_skip(*model, train, norm);
@@ -294,6 +336,8 @@ int run_train(TrainArgs a) {
   opt.lr = lr;
   if (batch > 0) opt.batch_size = int(batch);
   if (sample_vertices > 0) opt.sample_vertices = sample_vertices;
+  if (!a.sampling.empty())
+    opt.sampling = a.sampling == "full" ? Sampling::full : a.sampling == "random" ? Sampling::random : Sampling::consecutive;
   // Parameters are drawn (or loaded) on the CPU and moved before the
   // optimiser allocates its moments next to them.
   model->to(dev);
@@ -319,7 +363,10 @@ int run_train(TrainArgs a) {
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
                                            {"samples", std::to_string(samples)},
                                            {"batch", std::to_string(opt.batch_size)},
-                                           {"sample_vertices", std::to_string(opt.sample_vertices)}};
+                                           {"sample_vertices", std::to_string(opt.sample_vertices)},
+                                           {"sampling", opt.sampling == Sampling::full     ? "full"
+                                                        : opt.sampling == Sampling::random ? "random"
+                                                                                            : "consecutive"}};
   // The node features a character command (predict-weights, deform) must
   // compute for this model (character_model.hpp).
   extra["features"] = td ? (any_skeleton ? "bone-candidates" : cfg.task == Task::weights ? "neuroskinning" : "densegats")
@@ -371,6 +418,11 @@ int run_train(TrainArgs a) {
     history = gatcore::character::parse_history(loaded.file.metadata.at("loss_history"), resume);
     std::erase_if(history, [&](const LossRecord& r) { return r.epoch > trainer.epoch(); });
   }
+  // --keep-best: the lowest validation loss so far (a resumed run's history included).
+  double best_val = -1;
+  int best_epoch = 0;
+  for (const LossRecord& r : history)
+    if (r.val >= 0 && (best_val < 0 || r.val < best_val)) best_val = r.val, best_epoch = r.epoch;
   if (trainer.epoch() >= epochs) {
     if (root) std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
     return 0;
@@ -415,13 +467,19 @@ int run_train(TrainArgs a) {
       save_checkpoint(out, *model, norm, &trainer, extra);
       gatcore::character::write_loss_outputs(history, curve);
     }
+    const bool improved = !keep_best.empty() && st.val_loss >= 0 && (best_val < 0 || st.val_loss < best_val);
+    if (improved) {
+      best_val = st.val_loss;
+      best_epoch = st.epoch;
+      if (root) save_checkpoint(keep_best, *model, norm, &trainer, extra);
+    }
     if (tty) std::fprintf(stderr, "\r\033[K");
     char val_text[32] = "-";
     if (st.val_loss >= 0) std::snprintf(val_text, sizeof val_text, "%.6f", st.val_loss);
     if (root && !quiet)
-      std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s\n", st.epoch,
+      std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s%s%s\n", st.epoch,
                 epochs, st.train_loss, val_text, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
-                out.c_str());
+                out.c_str(), improved ? ", best so far -> " : "", improved ? keep_best.c_str() : "");
     if (root && !quiet && comm.size() > 1)
       std::printf("  rank 0: %.0f steps, %.3f MB sent per step, %.2f s in collectives\n", double(st.batches),
                   st.comm_bytes / 1e6 / double(std::max<std::int64_t>(st.batches, 1)), st.comm_seconds);
@@ -430,6 +488,8 @@ int run_train(TrainArgs a) {
     // Stopping is rank 0's decision (clocks and Ctrl-C differ between ranks).
     int stop[2] = {minutes > 0 && trained_s >= minutes * 60.0 && trainer.epoch() < epochs, int(g_stop)};
     comm.broadcast(stop, sizeof stop, 0);
+    if (root && !quiet && !keep_best.empty() && (stop[0] || stop[1] || trainer.epoch() >= epochs))
+      std::printf("best validation loss %.6f at epoch %d, written to %s\n", best_val, best_epoch, keep_best.c_str());
     if (stop[0]) {
       if (root) std::printf("time budget of %g minutes reached after epoch %d (%s); model written to %s\n", minutes, st.epoch,
                   gat::hms(trained_s).c_str(), out.c_str());

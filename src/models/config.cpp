@@ -31,8 +31,11 @@ ModelConfig ModelConfig::defaults(const std::string& name, std::int64_t in_dim, 
     // NeuroSkinning's graph network without geodesic pooling over the
     // skeleton-agnostic bone-candidate features (character/features/
     // bone_candidates.hpp): out_dim = candidates per vertex, not bones.
+    // Bone heat's weight of each candidate is the logits' prior (its log):
+    // untrained, the model is bone heat over the vertex's candidates.
     c.task = Task::weights;
     c.pool = false;
+    c.logit_prior = true;
   } else {
     throw InvalidArgument("unknown model '" + name +
                           "' (known: densegats, densegats-noself, densegats-nodense, origat, neuroskinning, "
@@ -156,6 +159,9 @@ const std::vector<Field>& fields() {
       list_field("gc_dims", &ModelConfig::gc_dims),
       list_field("gc_pool", &ModelConfig::gc_pool),
       bool_field("pool", &ModelConfig::pool),
+      bool_field("logit_prior", &ModelConfig::logit_prior),
+      list_field("pair_scorer", &ModelConfig::pair_scorer),
+      int_field("pair_features", &ModelConfig::pair_features),
       list_field("global_mlp", &ModelConfig::global_mlp),
       list_field("classifier", &ModelConfig::classifier),
       list_field("fc", &ModelConfig::fc),

@@ -10,8 +10,21 @@
 // copy and the [n, global] broadcast (and their gradients) disappear. Same
 // parameters, same checkpoints; the sum is reassociated (float rounding only).
 // With task = displacement: out = 3, no softmax (DenseGATs' comparison).
+// With config.logit_prior (skinweights-any): logits = classifier output +
+// Batch::prior, the classifier's last Linear starting at zero, so the
+// untrained model is softmax(prior) (bone heat over each vertex's candidate
+// bones) and training learns corrections (in log space) to the prior.
+// With config.pair_scorer (skinweights-any): the classifier keeps its hidden
+// layers, and its last layer (one weight column per candidate slot: what it
+// learns about "the 3rd nearest bone" does not carry to the 1st) becomes one
+// small MLP applied to every (vertex, slot): context = hidden W_c + b,
+// pair = (that slot's pair columns) W_p, leaky(context + pair) → hidden
+// layers → 1 score (RigNet's shared scorer; the vertex's context product is
+// computed once, not once per slot). Its last Linear is the one that starts
+// at zero under logit_prior.
 #include "gatcore/backend.hpp"
 #include "gatcore/nn/gc_unit.hpp"
+#include "gatcore/nn/linear.hpp"
 #include "gatcore/nn/mlp.hpp"
 #include "models_impl.hpp"
 
@@ -38,7 +51,33 @@ class NeuroSkinning final : public Model {
         global_width_ = global_.out_width(w);
       }
     }
-    classifier_ = nn::Mlp(root.sub("classifier"), w + global_width_, c.classifier, c.out_dim, dl, init);
+    const bool shared = !c.pair_scorer.empty();
+    classifier_ = nn::Mlp(root.sub("classifier"), w + global_width_, c.classifier, shared ? 0 : c.out_dim, dl, init);
+    nn::Linear* last = &classifier_.last;
+    if (shared) {
+      GATCORE_CHECK(c.task == Task::weights && !c.classifier.empty() && c.pair_features > 0 &&
+                        c.out_dim * c.pair_features <= c.in_dim,
+                    "neuroskinning: pair_scorer needs the weights task, a hidden classifier layer and pair_features "
+                    "> 0 with out_dim x pair_features (", c.out_dim, " x ", c.pair_features, ") <= in_dim (", c.in_dim,
+                    ")");
+      const nn::Scope s = root.sub("scorer");
+      const std::int64_t h = c.classifier.back(), s0 = c.pair_scorer[0];
+      scorer_context_ = nn::Linear(s.sub("context"), h, s0, init, nn::Init::glorot, true);
+      scorer_pair_ = nn::Linear(s.sub("pair"), c.pair_features, s0, init, nn::Init::glorot, false);
+      for (std::size_t k = 1; k < c.pair_scorer.size(); ++k)
+        scorer_hidden_.emplace_back(s.sub("hidden").sub(std::int64_t(k - 1)), c.pair_scorer[k - 1], c.pair_scorer[k],
+                                    init, nn::Init::glorot, true);
+      scorer_out_ = nn::Linear(s.sub("out"), c.pair_scorer.back(), 1, init, nn::Init::glorot, true);
+      last = &scorer_out_;
+    }
+    if (c.logit_prior) {
+      GATCORE_CHECK(c.task == Task::weights, "neuroskinning: logit_prior needs the weights task");
+      // The last layer's weight gradient (hidden^T · dL/dlogits) is not zero,
+      // so it leaves zero on the first step; the layers below start learning
+      // once it has.
+      last->W.value().zero_();
+      last->b.value().zero_();
+    }
   }
 
   std::vector<int> pool_sizes() const override {
@@ -63,7 +102,15 @@ class NeuroSkinning final : public Model {
     Var glob = segment_max(b.graph, global_.forward(y, training, rng_));  // [characters, global]
     for (std::size_t k = 1; k < gc_.size(); ++k)
       y = gc_[k].forward_into(b.graph, nbr(gc_[k].opt.pool_size), buf.cols_slice(0, gc_[k].out()));
-    return output(classify(b.graph, y, glob, training), b);
+    Var logits = classify(b.graph, y, glob, training);
+    if (!cfg_.pair_scorer.empty()) logits = score_pairs(logits, b.x);
+    if (cfg_.logit_prior) {
+      GATCORE_CHECK(b.prior.defined(), "neuroskinning: the model adds a log prior to its logits (logit_prior) and "
+                                       "the batch has none (a skinweights-any sample carries log bone heat)");
+      check_shape(b.prior, logits.rows(), logits.cols(), "batch prior");
+      logits = add(logits, Var(b.prior));
+    }
+    return output(logits, b);
   }
 
   // classifier_(concat(y, broadcast_segments(glob))) without building either.
@@ -79,6 +126,23 @@ class NeuroSkinning final : public Model {
     return classifier_.forward(classifier_.layers[0].after_linear(z, training, rng_), training, rng_, 1);
   }
 
+  // Per slot i: out(leaky(... leaky(context + pair_i W_p) ...)) -> [n, 1];
+  // the slots' scores side by side -> [n, out_dim].
+  Var score_pairs(const Var& hidden, const Tensor& x) {
+    const std::int64_t n = x.rows(), P = cfg_.pair_features, first = cfg_.in_dim - cfg_.out_dim * P;
+    Backend& be = backend(x.device());
+    const Var context = scorer_context_.forward(hidden);
+    std::vector<Var> scores;
+    for (std::int64_t i = 0; i < cfg_.out_dim; ++i) {
+      Tensor cols = be.empty(n, P);  // the slot's columns, contiguous (an input: no gradient)
+      be.copy(x.cols_slice(first + i * P, first + (i + 1) * P), cols);
+      Var z = activation(Activation::leaky_relu, add(context, scorer_pair_.forward(Var(cols))), cfg_.slope);
+      for (const nn::Linear& l : scorer_hidden_) z = activation(Activation::leaky_relu, l.forward(z), cfg_.slope);
+      scores.push_back(scorer_out_.forward(z));
+    }
+    return concat(scores);
+  }
+
   void fold() override {
     stage1_.fold();
     global_.fold();
@@ -88,6 +152,8 @@ class NeuroSkinning final : public Model {
  private:
   nn::Mlp stage1_, global_, classifier_;
   std::vector<nn::GcUnit> gc_;
+  nn::Linear scorer_context_, scorer_pair_, scorer_out_;  // config.pair_scorer only
+  std::vector<nn::Linear> scorer_hidden_;
   std::int64_t global_width_ = 0;
 };
 

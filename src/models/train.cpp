@@ -106,12 +106,18 @@ Batch make_batch(const std::vector<const Sample*>& samples, const std::vector<st
   const bool has_target = samples[0]->target.defined();
   const std::int64_t tc = has_target ? samples[0]->target.cols() : 0;
   bool any_mask = false;
+  const bool has_prior = samples[0]->prior.defined();
   for (std::size_t b = 0; b < samples.size(); ++b) {
     const Sample& s = *samples[b];
     GATCORE_CHECK(s.graph != nullptr, "sample '", s.name, "': no graph");
     const std::int64_t n = s.graph->num_nodes;
     check_shape(s.features, n, d, ("features of sample '" + s.name + "'").c_str());
     if (has_target) check_shape(s.target, n, tc, ("target of sample '" + s.name + "'").c_str());
+    GATCORE_CHECK(s.prior.defined() == has_prior, "make_batch: sample '", s.name, "' ",
+                  has_prior ? "has no prior, " : "has a prior, ", "sample '", samples[0]->name, "' ",
+                  has_prior ? "has one" : "has none");
+    if (has_prior)
+      check_shape(s.prior, n, samples[0]->prior.cols(), ("prior of sample '" + s.name + "'").c_str());
     sel[b] = selections[b];
     if (sel[b].empty()) {
       sel[b].resize(std::size_t(n));
@@ -129,10 +135,12 @@ Batch make_batch(const std::vector<const Sample*>& samples, const std::vector<st
   out.graph = samples.size() == 1 ? share(subs[0]) : share(batch_graphs(ptrs));
   Tensor raw = Tensor::empty(total, d);
   if (has_target) out.target = Tensor::empty(total, tc);
+  if (has_prior) out.prior = Tensor::empty(total, samples[0]->prior.cols());
   std::int64_t r0 = 0;
   for (std::size_t b = 0; b < samples.size(); ++b) {
     gather_rows(samples[b]->features, sel[b], raw, r0);
     if (has_target) gather_rows(samples[b]->target, sel[b], out.target, r0);
+    if (has_prior) gather_rows(samples[b]->prior, sel[b], out.prior, r0);
     r0 += std::int64_t(sel[b].size());
   }
   out.x = norm.defined() ? norm.apply(raw) : raw;
@@ -210,6 +218,7 @@ void to_device(Batch& b, Device d) {
   if (b.x.defined()) b.x = to(b.x, d);
   if (b.target.defined()) b.target = to(b.target, d);
   if (b.mask.defined()) b.mask = to(b.mask, d);
+  if (b.prior.defined()) b.prior = to(b.prior, d);
 }
 
 namespace {

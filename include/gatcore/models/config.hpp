@@ -44,6 +44,22 @@ struct ModelConfig {
   std::vector<std::int64_t> stage1{128, 64};
   std::vector<std::int64_t> gc_heads{4, 2, 2}, gc_dims{64, 64, 64}, gc_pool{16, 24, 64};
   bool pool = true;  // false = neuroskinning-nopool
+  // A log prior on the logits (skinweights-any): logits = classifier output +
+  // Batch::prior (the data's log prior per output column, e.g. log(bone heat
+  // weight + eps) of each candidate bone), and the classifier's last layer
+  // starts at zero, so the untrained model is the prior's softmax and
+  // training learns corrections to it. Configs written before the key
+  // existed read as off.
+  bool logit_prior = false;
+  // A shared per-(vertex, output slot) scorer instead of the classifier's
+  // last layer (skinweights-any; RigNet's design): the input's last
+  // out_dim * pair_features columns are pair_features columns per slot
+  // (a vertex's candidate bones), and one MLP of these hidden widths scores
+  // every slot from the vertex's context (the classifier's hidden output)
+  // and that slot's columns, the same weights for every slot. Empty = the
+  // classifier's per-slot output layer (configs before the key: empty).
+  std::vector<std::int64_t> pair_scorer;
+  int pair_features = 0;
   std::vector<std::int64_t> global_mlp{512, 1024};
   std::vector<std::int64_t> classifier{1024, 512};
   // FC baseline (NeuroSkinning Table 7)

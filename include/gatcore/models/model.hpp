@@ -25,6 +25,7 @@ struct Batch {
   // pool size J -> graph whose row i lists the J geodesically nearest vertices of i
   std::map<int, GraphPtr> neighbours;
   Tensor mask;  // bone mask, [1, B] or [n, B] (0 = bone absent), or undefined
+  Tensor prior; // [n, out_dim] log prior (Sample::prior), or undefined
 };
 
 class Model {

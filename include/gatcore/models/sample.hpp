@@ -20,6 +20,10 @@ struct Sample {
   // the trainer uses breadth-first hop distance on `graph` instead.
   std::vector<std::vector<std::int32_t>> geodesic_neighbours;
   Tensor bone_mask;   // optional [1, |B|] 0/1 mask of the character's bones in the super skeleton
+  // Optional [n, out_dim] log prior added to the logits of a model with
+  // ModelConfig::logit_prior (skinweights-any: log(bone heat + eps) of each
+  // candidate); not normalised. Values under a 0 of the mask do not matter.
+  Tensor prior;
 };
 
 // Per-column feature normalisation (z-score) and a scalar target scale for

@@ -70,11 +70,12 @@ std::vector<std::vector<std::int32_t>> hop_neighbours(const CsrGraph& g, int k);
 
 // One block-diagonal batch of the given samples restricted to the given
 // vertex selections (empty selection = all vertices), with normalised
-// features, targets, bone masks and the neighbour graphs of `pool_sizes`.
+// features, targets, bone masks, log priors (all samples or none) and the
+// neighbour graphs of `pool_sizes`.
 Batch make_batch(const std::vector<const Sample*>& samples, const std::vector<std::vector<std::int32_t>>& selections,
                  const Normaliser& norm, const std::vector<int>& pool_sizes);
 
-// Moves the batch's features, target and mask to `d` (graphs stay: backends
+// Moves the batch's features, target, mask and prior to `d` (graphs stay: backends
 // upload them themselves).
 void to_device(Batch& b, Device d);
 

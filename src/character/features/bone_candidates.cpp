@@ -105,11 +105,26 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
       f[6] = e.t;
       f[7] = float(depth[j]) / float(max_depth);
       f[8] = children[j].empty() ? 1.0f : 0.0f;
-      f[9] = heat_row[j];
+      f[kBoneHeatPairColumn] = heat_row[j];
     }
     for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e) heat_row[heat.joint[e]] = 0.0f;
   }
   return out;
+}
+
+Tensor bone_heat_log_prior(const BoneCandidates& c, float eps) {
+  GATCORE_CHECK(eps > 0.0f && std::isfinite(eps), "bone_heat_log_prior: eps must be positive, got ", eps);
+  const std::int64_t n = c.features.rows();
+  GATCORE_CHECK(c.features.cols() == bone_candidate_feature_dim(c.k), "bone_heat_log_prior: ", c.features.cols(),
+                " feature columns for ", c.k, " candidates");
+  Tensor p = Tensor::zeros(n, c.k);
+  for (std::int64_t v = 0; v < n; ++v)
+    for (int i = 0; i < c.valid; ++i) {
+      const float h = c.features.at(v, 6 + std::int64_t(i) * kPairFeatures + kBoneHeatPairColumn);
+      GATCORE_CHECK(std::isfinite(h) && h >= 0.0f, "bone_heat_log_prior: bone heat weight ", h, " at vertex ", v);
+      p.at(v, i) = std::log(h + eps);
+    }
+  return p;
 }
 
 Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w) {

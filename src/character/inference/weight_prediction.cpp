@@ -77,6 +77,7 @@ SkinWeights predict_skin_weights_any(models::Model& model, const models::Normali
   models::Sample s;
   s.name = pc.character.name;
   s.features = c.features;
+  if (cfg.logit_prior) s.prior = bone_heat_log_prior(c);
   s.graph = share(CsrGraph(pc.mesh_graph));
   s.bone_mask = Tensor::zeros(1, k);
   for (int i = 0; i < c.valid; ++i) s.bone_mask.at(0, i) = 1.0f;

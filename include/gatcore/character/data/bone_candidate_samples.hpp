@@ -12,7 +12,7 @@ namespace gatcore::character {
 
 // The sample of one prepared character: candidate features, candidate
 // targets (the artist's weights), bone mask [1, k] (1 for the candidates that
-// name a joint), the mesh graph. `candidates` (optional) receives the lists.
+// name a joint), log prior (bone_heat_log_prior), the mesh graph. `candidates` (optional) receives the lists.
 models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, BoneCandidates* candidates = nullptr);
 
 std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, DatasetPart part, int k);

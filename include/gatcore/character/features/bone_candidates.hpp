@@ -28,6 +28,12 @@ namespace gatcore::character {
 
 inline constexpr int kPairFeatures = 10;
 inline constexpr int kDefaultCandidates = 8;
+inline constexpr int kBoneHeatPairColumn = 9;  // bone heat's weight, within a candidate's columns
+// Added to bone heat's weight before the log of the prior: a candidate bone
+// heat gives nothing starts 6.9 logits below one it gives everything, a gap
+// the network can close where the artist disagrees; small enough that the
+// untrained model is bone heat to within K * eps per weight.
+inline constexpr float kBoneHeatPriorEps = 1e-3f;
 
 struct BoneCandidates {
   int k = 0;                        // candidates per vertex
@@ -45,6 +51,12 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k = kDef
 // artist's weights of the candidate joints renormalised; a vertex whose
 // joints are all outside its candidates puts 1 on its nearest candidate).
 Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w);
+
+// The log prior of skinweights-any's logits (models::Sample::prior, [n, k]):
+// log(bone heat's weight of the candidate + eps) for the valid candidates, 0
+// past them (masked). softmax of it is bone heat over the vertex's
+// candidates, renormalised, to within k * eps.
+Tensor bone_heat_log_prior(const BoneCandidates& c, float eps = kBoneHeatPriorEps);
 
 // Candidate probabilities [n, k] -> weights over the character's joints.
 SkinWeights weights_from_candidates(const BoneCandidates& c, const Tensor& probabilities);
