@@ -30,7 +30,6 @@ const std::vector<std::int32_t>& TrainingData::part(DatasetPart p) const {
 }
 
 std::int64_t TrainingData::feature_dim(models::Task task) const {
-  const auto S = static_cast<std::int64_t>(description.distortion_scales.size());
   return task == models::Task::displacement ? displacement_feature_dim(nearest_joints) : 6 + super.num_bones();
 }
 
