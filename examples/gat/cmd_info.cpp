@@ -14,6 +14,7 @@
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
 #include "gatcore/character/features/features.hpp"
@@ -185,6 +186,13 @@ void print_model(const std::string& path) {
     std::printf("bones      %lld (%s%s)%s\n", static_cast<long long>(std::count(sk.begin(), sk.end(), ',') + (sk.empty() ? 0 : 1)),
                 sk.substr(0, 60).c_str(), sk.size() > 60 ? ", ..." : "",
                 nearest ? ": the training data's skeleton, not matched (nearest-joint columns)" : "");
+    if (!nearest) {
+      const std::size_t nb = std::size_t(std::count(sk.begin(), sk.end(), ',') + (sk.empty() ? 0 : 1));
+      const BonePresence p = checkpoint_bone_presence(l.file, path, nb);
+      if (!p.count.empty())
+        std::printf("           %lld had by all %d training characters (a character lacking one gets a warning)\n",
+                    static_cast<long long>(std::count(p.count.begin(), p.count.end(), p.characters)), p.characters);
+    }
   }
   if (l.file.metadata.count("loss_history")) {
     const auto h = parse_history(l.file.metadata.at("loss_history"), path);
