@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "checkpoint_v1.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "model_fixtures.hpp"
 
@@ -282,34 +283,7 @@ TEST_CASE("the checkpoint checksum does not depend on the order of tensors in th
   std::remove(b.c_str());
 }
 
-namespace {
-// A format-version-1 file of the same contents, as older gatcore wrote it:
-// format_version "1" and the checksum (FNV-1a 64) over the data section only.
-std::string version_1_bytes(const std::string& v2) {
-  std::uint64_t n = 0;
-  for (int k = 0; k < 8; ++k) n |= std::uint64_t(static_cast<unsigned char>(v2[std::size_t(k)])) << (8 * k);
-  std::string header = v2.substr(8, std::size_t(n));
-  const std::string data = v2.substr(8 + std::size_t(n));
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
-  char sum[17];
-  std::snprintf(sum, sizeof sum, "%016llx", static_cast<unsigned long long>(h));
-  // The header's JSON holds "format_version":"2" and "checksum":"<16 hex>" once each.
-  const auto put = [&](const std::string& key, const std::string& value) {
-    const std::string k = "\"" + key + "\":\"";
-    const std::size_t at = header.find(k);
-    REQUIRE(at != std::string::npos);
-    const std::size_t v = at + k.size(), end = header.find('"', v);
-    header.replace(v, end - v, value);
-  };
-  put("format_version", "1");
-  put("checksum", sum);
-  while (header.size() % 8) header += ' ';
-  std::string out;
-  for (int k = 0; k < 8; ++k) out += char((std::uint64_t(header.size()) >> (8 * k)) & 0xff);
-  return out + header + data;
-}
-}  // namespace
+using testutil::version_1_bytes;
 
 TEST_CASE("version-1 checkpoints: refused with the way out, upgraded after their data checksum is verified") {
   const std::string v2 = tmp_path("v2"), v1 = tmp_path("v1"), up = tmp_path("up"), bad = tmp_path("v1bad");

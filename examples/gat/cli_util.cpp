@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 
 #include "cli_options.hpp"
@@ -44,6 +45,17 @@ long parse_int(const std::string& flag, const std::string& v, long lo, long hi) 
   const std::string err = int_in(lo, hi)(text);  // the options' own check and wording
   if (!err.empty()) throw gatcore::InvalidArgument(flag + ": " + err);
   return std::strtol(v.c_str(), nullptr, 10);
+}
+
+void warn_unseen_absent_bones(const char* command, const gatcore::models::CheckpointFile& f,
+                              const std::string& model_path, const std::string& character,
+                              const gatcore::character::BoneMapping& m, const std::vector<std::string>& bones,
+                              const char* remedy) {
+  using namespace gatcore::character;
+  const BonePresence presence = checkpoint_bone_presence(f, model_path, bones.size());
+  const std::string w = unseen_absent_bones_warning(character, unseen_absent_bones(m, bones, presence), presence);
+  if (!w.empty())
+    std::fprintf(stderr, "%s: %s. Name the matching joints with --alias JOINT=BONE, or %s.\n", command, w.c_str(), remedy);
 }
 
 }  // namespace gat

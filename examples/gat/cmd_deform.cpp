@@ -91,14 +91,9 @@ int run(const DeformArgs& a) {
               lm.model->config().name.c_str(), model_path.c_str(), in.c_str(),
               static_cast<long long>(ch.mesh.num_vertices()), joints.c_str(), motion_path.c_str(), first, last - 1,
               double(clip.fps), device_label(dev).c_str());
-  if (nearest == 0) {
-    const BonePresence presence = checkpoint_bone_presence(lm.file, model_path, bones.size());
-    const std::string w = unseen_absent_bones_warning(in, unseen_absent_bones(d.mapping, bones, presence), presence);
-    if (!w.empty())
-      std::fprintf(stderr, "gat deform: %s. Name the matching joints with --alias JOINT=BONE, or use a model trained with "
-                   "--joint-columns nearest:K (any skeleton).\n",
-                   w.c_str());
-  }
+  if (nearest == 0)
+    warn_unseen_absent_bones("gat deform", lm.file, model_path, in, d.mapping, bones,
+                             "use a model trained with --joint-columns nearest:K (any skeleton)");
   BakedFrames baked;
   baked.fps = clip.fps;
   double sum_f = 0, sum_i = 0, sum_t = 0, sum_corr = 0, max_corr = 0;

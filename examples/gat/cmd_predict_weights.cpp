@@ -140,12 +140,8 @@ int run(const PredictArgs& a) {
               static_cast<long long>(p.weights.max_influences()), k);
   std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
               out.c_str());
-  const BonePresence presence = checkpoint_bone_presence(lm.file, model_path, bones.size());
-  const std::string w = unseen_absent_bones_warning(in, unseen_absent_bones(p.mapping, bones, presence), presence);
-  if (!w.empty())
-    std::fprintf(stderr, "gat predict-weights: %s. Name the matching joints with --alias JOINT=BONE, or predict with a "
-                 "skinweights-any model or --method bone-heat (any skeleton).\n",
-                 w.c_str());
+  warn_unseen_absent_bones("gat predict-weights", lm.file, model_path, in, p.mapping, bones,
+                           "predict with a skinweights-any model or --method bone-heat (any skeleton)");
   return 0;
 }
 

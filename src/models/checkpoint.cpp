@@ -379,12 +379,17 @@ LoadedModel load_checkpoint_file(CheckpointFile file, const std::string& path) {
 
 LoadedModel load_checkpoint(const std::string& path) { return load_checkpoint_file(read_checkpoint_file(path), path); }
 
-int upgrade_checkpoint(const std::string& in, const std::string& out) {
-  CheckpointFile f = parse_checkpoint_impl(read_bytes(in), in, true);
-  const int version = f.metadata.at("format_version") == "1" ? 1 : 2;
+CheckpointFile upgrade_checkpoint_bytes(std::string_view bytes, const std::string& path, int* version) {
+  CheckpointFile f = parse_checkpoint_impl(bytes, path, true);
+  if (version) *version = f.metadata.at("format_version") == "1" ? 1 : 2;
   f.metadata["format_version"] = kVersion;  // checkpoint_bytes writes the version-2 checksum
-  (void)load_checkpoint_file(f, in);  // a model must load from it before anything is written
-  write_checkpoint_file(out, f);
+  (void)load_checkpoint_file(f, path);  // a model must load from it before anything is written
+  return f;
+}
+
+int upgrade_checkpoint(const std::string& in, const std::string& out) {
+  int version = 0;
+  write_checkpoint_file(out, upgrade_checkpoint_bytes(read_bytes(in), in, &version));
   return version;
 }
 

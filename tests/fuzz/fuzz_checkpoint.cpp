@@ -1,4 +1,5 @@
-// Checkpoint reader (safetensors header + tensors), from memory.
+// Checkpoint readers (safetensors header + tensors), from memory: the
+// version-2 reader and gat upgrade-checkpoint's (versions 1 and 2, model built).
 #include <string_view>
 
 #include "fuzz_util.hpp"
@@ -6,6 +7,12 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   return gatcore::fuzz::guarded([&] {
-    gatcore::models::parse_checkpoint(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.gcm");
+    const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+    try {
+      gatcore::models::parse_checkpoint(bytes, "fuzz.gcm");
+    } catch (const gatcore::Error&) {
+    }
+    // gat upgrade-checkpoint's reader: version 1 too, then the model built from it.
+    gatcore::models::upgrade_checkpoint_bytes(bytes, "fuzz.gcm");
   });
 }

@@ -3,8 +3,10 @@
 // Small inputs on purpose (libFuzzer mutates faster on short files).
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "character_fixtures.hpp"
+#include "checkpoint_v1.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/io/bake.hpp"
@@ -24,6 +26,11 @@ int main(int argc, char** argv) {
   cfg.fc = {8};
   auto m = models::make_model(cfg, 1);
   models::save_checkpoint((out / "checkpoint" / "fc.gcm").string(), *m, models::Normaliser{});
+  {  // the same as format version 1 (gat upgrade-checkpoint's input)
+    std::ifstream is(out / "checkpoint" / "fc.gcm", std::ios::binary);
+    const std::string v2{std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>()};
+    std::ofstream(out / "checkpoint" / "fc_v1.gcm", std::ios::binary) << testutil::version_1_bytes(v2);
+  }
   models::CheckpointFile f;
   f.metadata["config"] = "name = fc";
   f.tensors.emplace_back("a", Tensor::full(2, 3, 0.5f));

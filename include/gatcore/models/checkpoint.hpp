@@ -81,6 +81,9 @@ LoadedModel load_checkpoint(const std::string& path);
 // it: version 1 could not tell an edited header, so upgrade only files you
 // trust (`gat upgrade-checkpoint`).
 int upgrade_checkpoint(const std::string& in, const std::string& out);
+// The same from memory: the verified, loadable file as version 2 (written by
+// write_checkpoint_file); `version` (optional) receives the version read.
+CheckpointFile upgrade_checkpoint_bytes(std::string_view bytes, const std::string& path, int* version = nullptr);
 
 // Restores optimiser moments, epoch, lr, RNG and scheduler state saved with
 // the trainer (the trainer must wrap the model loaded from the same file).
