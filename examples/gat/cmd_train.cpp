@@ -337,7 +337,7 @@ int run_train(TrainArgs a) {
   if (batch > 0) opt.batch_size = int(batch);
   if (sample_vertices > 0) opt.sample_vertices = sample_vertices;
   if (!a.sampling.empty())
-    opt.sampling = a.sampling == "full" ? Sampling::full : a.sampling == "random" ? Sampling::random : Sampling::consecutive;
+    opt.sampling = sampling_from_name(a.sampling);
   // Parameters are drawn (or loaded) on the CPU and moved before the
   // optimiser allocates its moments next to them.
   model->to(dev);
@@ -364,9 +364,7 @@ int run_train(TrainArgs a) {
                                            {"samples", std::to_string(samples)},
                                            {"batch", std::to_string(opt.batch_size)},
                                            {"sample_vertices", std::to_string(opt.sample_vertices)},
-                                           {"sampling", opt.sampling == Sampling::full     ? "full"
-                                                        : opt.sampling == Sampling::random ? "random"
-                                                                                            : "consecutive"}};
+                                           {"sampling", sampling_name(opt.sampling)}};
   // The node features a character command (predict-weights, deform) must
   // compute for this model (character_model.hpp).
   extra["features"] = td ? (any_skeleton ? "bone-candidates" : cfg.task == Task::weights ? "neuroskinning" : "densegats")

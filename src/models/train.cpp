@@ -12,6 +12,16 @@
 
 namespace gatcore::models {
 
+const char* sampling_name(Sampling s) {
+  return s == Sampling::full ? "full" : s == Sampling::random ? "random" : "consecutive";
+}
+
+Sampling sampling_from_name(const std::string& name) {
+  for (Sampling s : {Sampling::full, Sampling::consecutive, Sampling::random})
+    if (name == sampling_name(s)) return s;
+  throw InvalidArgument("unknown sampling '" + name + "' (full, consecutive, random)");
+}
+
 TrainOptions TrainOptions::defaults_for(const ModelConfig& cfg) {
   TrainOptions o;
   const bool ns = cfg.name.rfind("neuroskinning", 0) == 0 || cfg.name == "fc" || cfg.name == "pointnet";

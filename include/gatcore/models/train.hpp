@@ -26,6 +26,10 @@ enum class Sampling {
   consecutive,  // `sample_vertices` consecutive vertex ids from a random start (DenseGATs)
   random,       // `sample_vertices` distinct random vertices (NeuroSkinning)
 };
+// "full" / "consecutive" / "random" (gat train --sampling, checkpoint metadata "sampling").
+const char* sampling_name(Sampling s);
+// Throws InvalidArgument naming `name` for anything else.
+Sampling sampling_from_name(const std::string& name);
 enum class Schedule { plateau, step };
 
 struct TrainOptions {
