@@ -25,6 +25,7 @@
 #include <memory>
 #include <string>
 
+#include "kernels/gemm_bf16.hpp"
 #include "kernels/gemm_impl.hpp"
 #include "kernels/nn_detail.hpp"
 #include "kernels/simd.hpp"
@@ -84,7 +85,30 @@ bool detail::gemm_uses_packed_avx512() {
 #endif
 }
 
-void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha, float beta) {
+void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha, float beta,
+          Precision precision) {
+  detail::GemmTileFn fn = &detail::gemm_eigen_baseline;
+  if (precision == Precision::bf16) {
+    if (bf16_supported())
+      fn = [](const detail::GemmArgs& s) { detail::gemm_bf16_tile(s, true); };
+    else
+      fn = [](const detail::GemmArgs& s) { detail::gemm_bf16_tile(s, false); };
+  } else {
+#if defined(__x86_64__) && defined(__GNUC__)
+    switch (simd_level()) {
+      case SimdLevel::avx512:
+        fn = eigen_requested() ? &detail::gemm_eigen_avx512 : &detail::gemm_packed_avx512;
+        break;
+      case SimdLevel::avx2: fn = &detail::gemm_eigen_avx2; break;
+      case SimdLevel::scalar: break;
+    }
+#endif
+  }
+  detail::gemm_tiled(A, trans_a, B, trans_b, C, alpha, beta, fn);
+}
+
+void detail::gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
+                        float beta, GemmTileFn fn) {
   check_cpu_f32(A, "gemm: A");
   check_cpu_f32(B, "gemm: B");
   check_cpu_f32(C, "gemm: C");
@@ -117,15 +141,6 @@ void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Te
     }
     return;
   }
-  using Fn = void (*)(const detail::GemmArgs&);
-  Fn fn = &detail::gemm_eigen_baseline;
-#if defined(__x86_64__) && defined(__GNUC__)
-  switch (simd_level()) {
-    case SimdLevel::avx512: fn = eigen_requested() ? &detail::gemm_eigen_avx512 : &detail::gemm_packed_avx512; break;
-    case SimdLevel::avx2: fn = &detail::gemm_eigen_avx2; break;
-    case SimdLevel::scalar: break;
-  }
-#endif
   // Fixed tiling of C, and a fixed split of k when C has too few tiles to
   // keep the threads busy (weight gradients X^T dY: small C, long k). Both
   // are functions of the shape only.

@@ -91,9 +91,19 @@ struct Bf16Epilogue {
   std::uint32_t* words = nullptr;
   std::int64_t ldw = 0;
 };
+// With `accumulate`: C += A B (no epilogue), C summed as a further k block would be.
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
                       std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw = nullptr,
-                      std::int64_t ldw = 0, const Bf16Epilogue* epi = nullptr);
+                      std::int64_t ldw = 0, const Bf16Epilogue* epi = nullptr, bool accumulate = false);
+// Training operands, packed per call (AVX512_BF16 CPUs only): X [k, n] is
+// x[kk * rs + j * cs] with rs or cs equal to 1 (a row-major view or its
+// transpose). pack_b_bf16_strided_avx512: pack_b_bf16's layout, bit for bit.
+// bf16_pairs_strided_avx512: row i of X [m, k] (x[i * rs + kk * cs]) as
+// ceil(k/2) pair words at out + i * ldw.
+void pack_b_bf16_strided_avx512(const float* b, std::int64_t rs, std::int64_t cs, std::int64_t k, std::int64_t n,
+                                std::uint32_t* dst);
+void bf16_pairs_strided_avx512(const float* a, std::int64_t rs, std::int64_t cs, std::int64_t m, std::int64_t k,
+                               std::uint32_t* out, std::int64_t ldw);
 // x[0, count) as ceil(count/2) bf16 pair words (AVX512_BF16 CPUs only; the
 // conversion gemm_bf16_avx512 applies to A's rows).
 void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out);

@@ -194,7 +194,7 @@ void panel_rows(std::int64_t mc, std::int64_t kp, const std::uint32_t* ab, std::
 
 void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
                std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw,
-               const Bf16Epilogue* epi) {
+               const Bf16Epilogue* epi, bool accumulate) {
   const std::int64_t kp_all = (k + 1) / 2;
   // Converted row stride (words; rows 64-byte aligned), or the caller's pre-converted rows.
   const std::int64_t lda_w = aw ? ldw : (kp_all + 15) / 16 * 16;
@@ -226,7 +226,7 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
             e.words = epi->words + i0 * epi->ldw + (j0 + jr) / 2;  // j0 + jr even (multiples of 16)
             e.ldw = epi->ldw;
           }
-          const bool acc = k0 > 0;
+          const bool acc = accumulate || k0 > 0;
           switch (w / 8) {  // 16 .. 80 columns, a multiple of 8
             case 2: panel_rows<1, false>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
             case 3: panel_rows<1, true>(mc, kp, at, lda_w, panel, ct, ldc, nr_eff, acc, e); break;
@@ -244,13 +244,123 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
   }
 }
 
+// ---- training operands (gemm_bf16.hpp: pack_b_bf16_strided_avx512, bf16_pairs_strided_avx512) ----
+
+// 16 pair words from two rows of 16 lanes: lane l = bf16(r0[l]) | bf16(r1[l]) << 16.
+inline __m512i pairs_of_rows(__m512 r0, __m512 r1) {
+  const __m512i lo = _mm512_cvtepu16_epi32((__m256i)_mm512_cvtneps_pbh(r0));
+  const __m512i hi = _mm512_cvtepu16_epi32((__m256i)_mm512_cvtneps_pbh(r1));
+  return _mm512_or_si512(lo, _mm512_slli_epi32(hi, 16));
+}
+// 16 pair words from 32 consecutive values x[0, count) (zeros past count).
+inline __m512i pairs_of_run(const float* x, std::int64_t count) {
+  const __m512 lo = _mm512_maskz_loadu_ps(lanes(count), x), hi = _mm512_maskz_loadu_ps(lanes(count - 16), x + 16);
+  return (__m512i)_mm512_cvtne2ps_pbh(hi, lo);
+}
+// In-register transpose of 16 x 16 32-bit words (gemm_packed_avx512.cpp's, on integers).
+inline void transpose16_words(__m512i r[16]) {
+  __m512i t[16];
+#pragma GCC unroll 8
+  for (int i = 0; i < 16; i += 2) {
+    t[i] = _mm512_unpacklo_epi32(r[i], r[i + 1]);
+    t[i + 1] = _mm512_unpackhi_epi32(r[i], r[i + 1]);
+  }
+#pragma GCC unroll 4
+  for (int i = 0; i < 16; i += 4) {
+    r[i] = _mm512_unpacklo_epi64(t[i], t[i + 2]);
+    r[i + 1] = _mm512_unpackhi_epi64(t[i], t[i + 2]);
+    r[i + 2] = _mm512_unpacklo_epi64(t[i + 1], t[i + 3]);
+    r[i + 3] = _mm512_unpackhi_epi64(t[i + 1], t[i + 3]);
+  }
+#pragma GCC unroll 4
+  for (int i = 0; i < 4; ++i) {
+    t[i] = _mm512_shuffle_i32x4(r[i], r[i + 4], 0x88);
+    t[i + 4] = _mm512_shuffle_i32x4(r[i], r[i + 4], 0xDD);
+    t[i + 8] = _mm512_shuffle_i32x4(r[i + 8], r[i + 12], 0x88);
+    t[i + 12] = _mm512_shuffle_i32x4(r[i + 8], r[i + 12], 0xDD);
+  }
+#pragma GCC unroll 8
+  for (int i = 0; i < 8; ++i) {
+    r[i] = _mm512_shuffle_i32x4(t[i], t[i + 8], 0x88);
+    r[i + 8] = _mm512_shuffle_i32x4(t[i], t[i + 8], 0xDD);
+  }
+}
+
+// Pair words of a [k, n] operand X(kk, j) = x[kk * rs + j * cs] (rs or cs 1)
+// for pairs [p0, p0 + 16) and columns [j0, j0 + 16) (zeros outside [0, k) x
+// [0, n)): out[q] = the 16 columns' words of pair p0 + q when `by_pair`, else
+// out[c] = column j0 + c's 16 words. One transpose converts between the two.
+inline void pair_block(const float* x, std::int64_t rs, std::int64_t cs, std::int64_t k, std::int64_t n,
+                       std::int64_t p0, std::int64_t j0, bool by_pair, __m512i out[16]) {
+  if (cs == 1) {  // rows contiguous in j: words by pair directly
+    const __mmask16 mj = lanes(n - j0);
+#pragma GCC unroll 16
+    for (int q = 0; q < 16; ++q) {
+      const std::int64_t kk = 2 * (p0 + q);
+      const __m512 r0 = kk < k ? _mm512_maskz_loadu_ps(mj, x + kk * rs + j0) : _mm512_setzero_ps();
+      const __m512 r1 = kk + 1 < k ? _mm512_maskz_loadu_ps(mj, x + (kk + 1) * rs + j0) : _mm512_setzero_ps();
+      out[q] = pairs_of_rows(r0, r1);
+    }
+    if (!by_pair) transpose16_words(out);
+  } else {  // columns contiguous in kk: words by column directly
+#pragma GCC unroll 16
+    for (int c = 0; c < 16; ++c)
+      out[c] = j0 + c < n ? pairs_of_run(x + (j0 + c) * cs + 2 * p0, k - 2 * p0) : _mm512_setzero_si512();
+    if (by_pair) transpose16_words(out);
+  }
+}
+
 }  // namespace
+
+void pack_b_bf16_strided_avx512(const float* b, std::int64_t rs, std::int64_t cs, std::int64_t k, std::int64_t n,
+                                std::uint32_t* dst) {
+  for (std::int64_t j0 = 0; j0 < n; j0 += kBf16Nc) {
+    const std::int64_t nc = std::min(kBf16Nc, n - j0);
+    const std::int64_t ncpad = bf16_ncpad(nc);
+    for (std::int64_t k0 = 0; k0 < k; k0 += kBf16Kc) {
+      const std::int64_t kc = std::min(kBf16Kc, k - k0), kp = (kc + 1) / 2;
+      std::uint32_t* block = dst + packed_bf16_offset(k, j0, nc, k0);
+      const float* xb = b + k0 * rs + j0 * cs;  // the block's (k0, j0)
+      for (std::int64_t jr = 0, w = 0; jr < ncpad; jr += w) {
+        w = bf16_panel_width(k, nc, jr);
+        std::uint32_t* panel = block + jr * kp;
+        for (std::int64_t p0 = 0; p0 < kp; p0 += 16)
+          for (std::int64_t c0 = 0; c0 < w; c0 += 16) {  // w is a multiple of 8: the last group may be 8 wide
+            __m512i v[16];
+            pair_block(xb, rs, cs, kc, nc, p0, jr + c0, true, v);
+            const __mmask16 mc = lanes(w - c0);
+            for (std::int64_t q = 0; q < std::min<std::int64_t>(16, kp - p0); ++q)
+              _mm512_mask_storeu_epi32(panel + (p0 + q) * w + c0, mc, v[q]);
+          }
+      }
+    }
+  }
+}
+
+void bf16_pairs_strided_avx512(const float* a, std::int64_t rs, std::int64_t cs, std::int64_t m, std::int64_t k,
+                               std::uint32_t* out, std::int64_t ldw) {
+  const std::int64_t kp = (k + 1) / 2;
+  if (cs == 1) {  // rows contiguous: convert_row's conversion
+    for (std::int64_t i = 0; i < m; ++i) convert_row(a + i * rs, k, out + i * ldw);
+    return;
+  }
+  // Row i of op(A) is column i of a [k, m] row-major array (x(kk, i) = a[kk * cs + i]):
+  // blocks of 16 rows x 16 pairs, transposed to rows.
+  for (std::int64_t i0 = 0; i0 < m; i0 += 16)
+    for (std::int64_t p0 = 0; p0 < kp; p0 += 16) {
+      __m512i v[16];
+      pair_block(a, cs, rs, k, m, p0, i0, false, v);
+      const __mmask16 mp = lanes(kp - p0);
+      for (std::int64_t c = 0; c < std::min<std::int64_t>(16, m - i0); ++c)
+        _mm512_mask_storeu_epi32(out + (i0 + c) * ldw + p0, mp, v[c]);
+    }
+}
 
 void gemm_bf16_avx512(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k, const std::uint32_t* bp,
                       std::int64_t n, float* c, std::int64_t ldc, const std::uint32_t* aw, std::int64_t ldw,
-                      const Bf16Epilogue* epi) {
+                      const Bf16Epilogue* epi, bool accumulate) {
   if (m == 0 || n == 0) return;
-  gemm_rows(a, lda, m, k, bp, n, c, ldc, aw, ldw, epi);
+  gemm_rows(a, lda, m, k, bp, n, c, ldc, aw, ldw, accumulate ? nullptr : epi, accumulate);
 }
 
 void bf16_pairs_avx512(const float* x, std::int64_t count, std::uint32_t* out) { convert_row(x, count, out); }

@@ -3,6 +3,8 @@
 // gemm_avx2.cpp; gemm_avx512.cpp), selected at run time by gemm().
 #include <cstdint>
 
+#include "gatcore/tensor.hpp"
+
 namespace gatcore::cpu::detail {
 
 struct GemmArgs {
@@ -32,6 +34,14 @@ std::int64_t prepacked_size_avx512(std::int64_t k, std::int64_t n);
 void prepack_b_avx512(const GemmArgs& g, float* dst);
 void gemm_prepacked_avx512(const GemmArgs& g, const float* packed);
 void gemm_eigen_baseline(const GemmArgs& g);
+// One tile of the bf16 product (gemm_bf16_train.cpp): the VDPBF16PS kernel
+// when `hardware` (AVX512_BF16 CPUs only), else its scalar emulation.
+void gemm_bf16_tile(const GemmArgs& g, bool hardware);
+// gemm()'s checks, fixed tiling and threading around a serial tile product
+// (gemm() picks `tile` from the precision and the CPU).
+using GemmTileFn = void (*)(const GemmArgs&);
+void gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
+                float beta, GemmTileFn tile);
 // Defined only on x86-64 builds (gemm_avx2.cpp / gemm_avx512.cpp).
 void gemm_eigen_avx2(const GemmArgs& g);
 void gemm_eigen_avx512(const GemmArgs& g);

@@ -35,6 +35,11 @@ class CpuBackend final : public Backend {
             float beta) override {
     cpu::gemm(A, ta, B, tb, C, alpha, beta);
   }
+  bool bf16_products() const override { return bf16_supported(); }
+  void gemm_bf16(const Tensor& A, bool ta, const Tensor& B, bool tb, const Tensor& C, float alpha,
+                 float beta) override {
+    cpu::gemm(A, ta, B, tb, C, alpha, beta, Precision::bf16);
+  }
   void add_row_bias(const Tensor& bias, const Tensor& y) override { cpu::add_row_bias(bias, y); }
   void column_sums_accumulate(const Tensor& d_y, const Tensor& d_bias) override {
     cpu::column_sums_accumulate(d_y, d_bias);

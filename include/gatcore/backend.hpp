@@ -34,6 +34,14 @@ class Backend {
   // Dense algebra.
   virtual void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
                     float beta) = 0;
+  // The same product with both operands rounded to bf16 and fp32 sums
+  // (Precision::bf16, precision.hpp), where bf16_products() says the backend
+  // has it; the default runs gemm (fp32).
+  virtual bool bf16_products() const { return false; }
+  virtual void gemm_bf16(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
+                         float beta) {
+    gemm(A, trans_a, B, trans_b, C, alpha, beta);
+  }
   virtual void add_row_bias(const Tensor& bias, const Tensor& y) = 0;
   virtual void column_sums_accumulate(const Tensor& d_y, const Tensor& d_bias) = 0;
   virtual void axpby(float alpha, const Tensor& a, float beta, const Tensor& b, const Tensor& y) = 0;

@@ -242,9 +242,19 @@ void forget_graphs(const Batch& b, Device d) {
 }
 }  // namespace
 
+Precision training_precision(Precision requested, Device d, std::string* why) {
+  if (why) why->clear();
+  if (requested == Precision::fp32 || backend(d).bf16_products()) return requested;
+  if (why)
+    *why = d == Device::cpu ? "this CPU has no AVX512_BF16 (or GATCORE_SIMD lowers the level): training in fp32"
+                            : std::string("the ") + device_name(d) + " backend has no bf16 products: training in fp32";
+  return Precision::fp32;
+}
+
 Trainer::Trainer(Model& model, TrainOptions opt, Normaliser norm, dist::Communicator& comm)
     : model_(model), comm_(comm), opt_(opt), norm_(std::move(norm)), adam_(model.parameters(), AdamOptions{opt.lr}),
       rng_(opt.seed ^ 0x5851f42d4c957f2dull) {
+  opt_.precision = training_precision(opt.precision, model.device());
   plateau_.factor = opt.plateau_factor;
   plateau_.patience = opt.plateau_patience;
   plateau_.min_lr = opt.min_lr;
@@ -339,6 +349,7 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
 
 double Trainer::step(const std::vector<const Sample*>& smp, const std::vector<std::vector<std::int32_t>>& sel,
                      const std::vector<int>& pools) {
+  ProductPrecisionScope precision(opt_.precision);  // forward and backward products
   adam_.zero_grad();
   if (comm_.size() == 1) {
     Batch batch = make_batch(smp, sel, norm_, pools);

@@ -20,15 +20,20 @@ Var linear(const Var& x, const Var& W, const Var& b, const Var& into) {
   Backend& be = backend_of(op, {&x, &W, &b});
   const bool grad = needs_grad({&x, &W, &b});
   Var y = make_output(op, be, x.rows(), W.cols(), into, grad);
-  be.gemm(x.value(), false, W.value(), false, y.value(), 1.0f, 0.0f);
+  const Precision prec = product_precision(be, x.cols());
+  product(be, prec, x.value(), false, W.value(), false, y.value(), 1.0f, 0.0f);
   if (b.defined()) be.add_row_bias(b.value(), y.value());
   if (grad) {
-    current_tape().record(op, [&be, xi = impl_if(x), Wi = impl_if(W), bi = impl_if(b), yi = y.impl(),
+    current_tape().record(op, [&be, prec, xi = impl_if(x), Wi = impl_if(W), bi = impl_if(b), yi = y.impl(),
                                xs = SavedTensor(x.value(), "x"), Ws = SavedTensor(W.value(), "W")] {
       Tensor dy = yi->grad_if_any();
       if (!dy.defined()) return;
-      accumulate_grad(be, xi, [&](const Tensor& dx, float beta) { be.gemm(dy, false, Ws.get(op), true, dx, 1.0f, beta); });
-      accumulate_grad(be, Wi, [&](const Tensor& dW, float beta) { be.gemm(xs.get(op), true, dy, false, dW, 1.0f, beta); });
+      accumulate_grad(be, xi, [&](const Tensor& dx, float beta) {
+        product(be, prec, dy, false, Ws.get(op), true, dx, 1.0f, beta);
+      });
+      accumulate_grad(be, Wi, [&](const Tensor& dW, float beta) {
+        product(be, prec, xs.get(op), true, dy, false, dW, 1.0f, beta);
+      });
       if (bi && bi->requires_grad) be.column_sums_accumulate(dy, bi->grad_or_zeros());
     });
   }

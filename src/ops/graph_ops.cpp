@@ -228,14 +228,19 @@ Var linear_segment_bias(const GraphPtr& g, const Var& x, const Var& W, const Var
   Var y(be.empty(x.rows(), W.cols()), grad);
   // y = s[segment(i)], then y += x W: one pass over y besides the product.
   be.broadcast_segments_forward(s.value(), g->segment_ptr, y.value());
-  be.gemm(x.value(), false, W.value(), false, y.value(), 1.0f, 1.0f);
+  const Precision prec = product_precision(be, x.cols());
+  product(be, prec, x.value(), false, W.value(), false, y.value(), 1.0f, 1.0f);
   if (grad)
-    current_tape().record(op, [&be, g, xi = x.impl(), Wi = W.impl(), si = s.impl(), yi = y.impl(),
+    current_tape().record(op, [&be, prec, g, xi = x.impl(), Wi = W.impl(), si = s.impl(), yi = y.impl(),
                                xs = SavedTensor(x.value(), "x"), Ws = SavedTensor(W.value(), "W")] {
       Tensor dy = yi->grad_if_any();
       if (!dy.defined()) return;
-      accumulate_grad(be, xi, [&](const Tensor& dx, float beta) { be.gemm(dy, false, Ws.get(op), true, dx, 1.0f, beta); });
-      accumulate_grad(be, Wi, [&](const Tensor& dW, float beta) { be.gemm(xs.get(op), true, dy, false, dW, 1.0f, beta); });
+      accumulate_grad(be, xi, [&](const Tensor& dx, float beta) {
+        product(be, prec, dy, false, Ws.get(op), true, dx, 1.0f, beta);
+      });
+      accumulate_grad(be, Wi, [&](const Tensor& dW, float beta) {
+        product(be, prec, xs.get(op), true, dy, false, dW, 1.0f, beta);
+      });
       if (si->requires_grad) be.broadcast_segments_backward(dy, g->segment_ptr, si->grad_or_zeros());
     });
   return y;

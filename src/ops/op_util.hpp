@@ -5,6 +5,7 @@
 #include "gatcore/autograd.hpp"
 #include "gatcore/backend.hpp"
 #include "gatcore/ops.hpp"
+#include "gatcore/precision.hpp"
 
 namespace gatcore::ops_detail {
 
@@ -19,6 +20,24 @@ Var make_output(const char* op, Backend& be, std::int64_t rows, std::int64_t col
 
 void check_var(const char* op, const char* arg, const Var& v);
 void check_same_shape(const char* op, const char* a_name, const Tensor& a, const char* b_name, const Tensor& b);
+
+// The precision of an op's products (precision.hpp): the scope's when the op
+// runs forward, fp32 on a backend without bf16 products. Ops capture it in
+// their tape record so backward multiplies as forward did.
+// Products over fewer than kBf16MinK terms (k = the input width) stay fp32:
+// too small to gain, and a broadcast through a ones column (Ori.GAT's bias,
+// matmul(ones, b)) would round the broadcast operand itself.
+constexpr std::int64_t kBf16MinK = 16;
+inline Precision product_precision(const Backend& be, std::int64_t k) {
+  return be.bf16_products() && k >= kBf16MinK ? current_product_precision() : Precision::fp32;
+}
+inline void product(Backend& be, Precision p, const Tensor& A, bool trans_a, const Tensor& B, bool trans_b,
+                    const Tensor& C, float alpha, float beta) {
+  if (p == Precision::bf16)
+    be.gemm_bf16(A, trans_a, B, trans_b, C, alpha, beta);
+  else
+    be.gemm(A, trans_a, B, trans_b, C, alpha, beta);
+}
 
 // Gradient buffer of an input if it wants one, else undefined (kernels skip it).
 inline Tensor grad_for(const ImplPtr& p) { return p && p->requires_grad ? p->grad_or_zeros() : Tensor{}; }

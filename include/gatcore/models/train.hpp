@@ -18,6 +18,7 @@
 #include "gatcore/models/model.hpp"
 #include "gatcore/models/sample.hpp"
 #include "gatcore/optim.hpp"
+#include "gatcore/precision.hpp"
 
 namespace gatcore::models {
 
@@ -44,6 +45,12 @@ struct TrainOptions {
   float step_gamma = 0.99f;
   int step_every = 200;
   std::uint64_t seed = 0;
+  // Precision of the training step's large products (linear layers, GAT
+  // projections: precision.hpp's ProductPrecisionScope around each step);
+  // validation and everything else stay fp32. The Trainer replaces bf16 by
+  // fp32 where the model's backend has no bf16 products (see
+  // training_precision); options().precision is what runs.
+  Precision precision = Precision::fp32;
 
   // The paper settings for a model: DenseGATs family and Ori.GAT: batch 8,
   // 1000 consecutive vertices, ReduceLROnPlateau; NeuroSkinning family: batch
@@ -64,6 +71,11 @@ struct PlateauScheduler {
   int bad_epochs = 0;
   float step(float metric, float lr);  // returns the new lr
 };
+
+// The precision a training step on device `d` runs for `requested`: bf16
+// needs that backend's bf16 products (the CPU backend: AVX512_BF16), else
+// fp32, with `why` (if given) set to a one-line reason; empty when granted.
+Precision training_precision(Precision requested, Device d, std::string* why = nullptr);
 
 // Vertices of `n` chosen for one training sample.
 std::vector<std::int32_t> sample_vertices(std::int64_t n, Sampling s, std::int64_t k, nn::Rng& rng);
