@@ -29,6 +29,7 @@ using gatbench::Cost;
 using gatbench::kF32;
 using gatcore::CsrGraph;
 using gatcore::Tensor;
+using gatcore::Precision;
 namespace cpu = gatcore::cpu;
 
 constexpr int H = 8;                 // heads
@@ -314,7 +315,7 @@ struct GemmCase {
   Tensor A, B, C, dC, dA, dB;
 };
 
-void gemm(benchmark::State& state) {
+void gemm_at(benchmark::State& state, Precision precision) {
   const std::int64_t M = state.range(0), K = state.range(1), N = state.range(2);
   const int which = static_cast<int>(state.range(3));
   const GemmCase& g = gatbench::cached<GemmCase>(std::vector<std::int64_t>{M, K, N}, [&] {
@@ -336,21 +337,29 @@ void gemm(benchmark::State& state) {
                                     : kF32 * (m * k + m * n + 2 * k * n);
   const Cost c{bytes, 2 * m * k * n, M};
   switch (which) {
-    case 0: gatbench::run(state, c, [&] { cpu::gemm(g.A, false, g.B, false, g.C, 1.0f, 0.0f); }); break;
-    case 1: gatbench::run(state, c, [&] { cpu::gemm(g.dC, false, g.B, true, g.dA, 1.0f, 1.0f); }); break;
-    default: gatbench::run(state, c, [&] { cpu::gemm(g.A, true, g.dC, false, g.dB, 1.0f, 1.0f); }); break;
+    case 0: gatbench::run(state, c, [&] { cpu::gemm(g.A, false, g.B, false, g.C, 1.0f, 0.0f, precision); }); break;
+    case 1: gatbench::run(state, c, [&] { cpu::gemm(g.dC, false, g.B, true, g.dA, 1.0f, 1.0f, precision); }); break;
+    default: gatbench::run(state, c, [&] { cpu::gemm(g.A, true, g.dC, false, g.dB, 1.0f, 1.0f, precision); }); break;
   }
 }
-BENCHMARK(gemm)
-    ->ArgNames({"M", "K", "N", "op"})
-    ->ArgsProduct({{8000}, {504}, {512}, {0, 1, 2}})
-    ->ArgsProduct({{8000}, {392}, {64}, {0, 1, 2}})
-    ->ArgsProduct({{8000}, {504}, {8}, {0, 1, 2}})  // the self-reinforced stream of a GAT block
-    ->ArgsProduct({{24576}, {1088}, {1024}, {0, 1, 2}})  // NeuroSkinning's classifier input layer (12 x 2048)
-    ->Args({2048, 2048, 2048, 0})                   // large squares: the machine's sgemm rate
-    ->Args({4096, 4096, 4096, 0})
-    ->UseRealTime()
-    ->Unit(benchmark::kMillisecond);
+void gemm(benchmark::State& state) { gemm_at(state, Precision::fp32); }
+// The training products in bf16 (gemm(..., Precision::bf16): operands rounded
+// and packed per call, VDPBF16PS; the portable emulation, slow, on CPUs
+// without AVX512_BF16). Compare with gemm/ of the same arguments.
+void gemm_bf16(benchmark::State& state) { gemm_at(state, Precision::bf16); }
+void gemm_shapes(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"M", "K", "N", "op"})
+      ->ArgsProduct({{8000}, {504}, {512}, {0, 1, 2}})
+      ->ArgsProduct({{8000}, {392}, {64}, {0, 1, 2}})
+      ->ArgsProduct({{8000}, {504}, {8}, {0, 1, 2}})       // the self-reinforced stream of a GAT block
+      ->ArgsProduct({{24576}, {1088}, {1024}, {0, 1, 2}})  // NeuroSkinning's classifier input layer (12 x 2048)
+      ->Args({2048, 2048, 2048, 0})                        // large squares: the machine's sgemm rate
+      ->Args({4096, 4096, 4096, 0})
+      ->UseRealTime()
+      ->Unit(benchmark::kMillisecond);
+}
+BENCHMARK(gemm)->Apply(gemm_shapes);
+BENCHMARK(gemm_bf16)->Apply(gemm_shapes);
 
 // The deploy path's forward products with pre-packed weights
 // (gemm_prepacked.hpp): C[M,N] = A[M,K] B[K,N], precision 0 = fp32 (gemm()'s
@@ -358,7 +367,6 @@ BENCHMARK(gemm)
 // the portable emulation: slow). Compare with gemm/.../op:0.
 void gemm_prepacked(benchmark::State& state) {
   const std::int64_t M = state.range(0), K = state.range(1), N = state.range(2);
-  using gatcore::Precision;
   const Precision p = state.range(3) ? Precision::bf16 : Precision::fp32;
   const Tensor A = gatbench::random_tensor(M, K, 21), C = Tensor::empty(M, N);
   const cpu::PrepackedB B = cpu::prepack_b(gatbench::random_tensor(K, N, 22), p);

@@ -39,8 +39,8 @@ double forward_gemm_flops(const gatcore::models::Model& m, std::int64_t rows) {
 }
 
 void model_train(benchmark::State& state, const gatbench::ModelWorkload& w) {
-  auto& c = gatbench::cached<ModelCase>(w.name + "_train",
-                                        [&] { return ModelCase(w.name, w.batch, w.vertices); });
+  auto& c = gatbench::cached<ModelCase>(w.name + "_train" + w.suffix(),
+                                        [&] { return ModelCase(w.name, w.batch, w.vertices, w.precision); });
   const std::int64_t rows = c.batch.x.rows();
   state.SetLabel(std::to_string(w.batch) + "x" + std::to_string(w.vertices) + " vertices");
   // forward + backward (input and weight gradients) = 3x the forward products
@@ -135,10 +135,10 @@ BENCHMARK(gat_layer_fwdbwd)->ArgName("nodes")->Arg(1000)->Arg(10000)->UseRealTim
 
 const bool registered = [] {
   for (const auto& [bench, w] : gatbench::train_workloads()) {
-    benchmark::RegisterBenchmark(("model_train/" + w.name).c_str(), model_train, w)
+    benchmark::RegisterBenchmark(("model_train/" + w.name + w.suffix()).c_str(), model_train, w)
         ->UseRealTime()
         ->Unit(benchmark::kMillisecond);
-    benchmark::RegisterBenchmark(("model_peak_rss/" + w.name).c_str(), model_peak_rss, bench)
+    benchmark::RegisterBenchmark(("model_peak_rss/" + w.name + w.suffix()).c_str(), model_peak_rss, bench)
         ->Iterations(1)
         ->UseRealTime()
         ->Unit(benchmark::kMillisecond);

@@ -28,6 +28,11 @@ struct ModelWorkload {
   std::string name;  // model name for make_model
   int batch = 0;
   std::int64_t vertices = 0;  // per character
+  // The training step's product precision (ProductPrecisionScope; bf16 runs
+  // fp32 on a CPU without AVX512_BF16, as the Trainer would).
+  gatcore::Precision precision = gatcore::Precision::fp32;
+  // Benchmark name suffix: model_train/<name><suffix>.
+  std::string suffix() const { return precision == gatcore::Precision::bf16 ? "_bf16" : ""; }
 };
 
 // The training workloads, by benchmark name.
@@ -36,6 +41,9 @@ inline const std::vector<std::pair<std::string, ModelWorkload>>& train_workloads
       {"densegats_train", {"densegats", 8, 1000}},
       {"origat_train", {"origat", 8, 1000}},
       {"neuroskinning_train", {"neuroskinning", 12, 2048}},
+      {"densegats_train_bf16", {"densegats", 8, 1000, gatcore::Precision::bf16}},
+      {"origat_train_bf16", {"origat", 8, 1000, gatcore::Precision::bf16}},
+      {"neuroskinning_train_bf16", {"neuroskinning", 12, 2048, gatcore::Precision::bf16}},
   };
   return w;
 }
@@ -65,8 +73,11 @@ struct ModelCase {
   std::unique_ptr<gatcore::models::Model> model;
   gatcore::models::Batch batch;
   std::unique_ptr<gatcore::Adam> adam;
+  gatcore::Precision precision = gatcore::Precision::fp32;
 
-  ModelCase(const std::string& name, int batch_size, std::int64_t vertices) {
+  ModelCase(const std::string& name, int batch_size, std::int64_t vertices,
+            gatcore::Precision prec = gatcore::Precision::fp32) {
+    precision = gatcore::models::training_precision(prec, gatcore::Device::cpu);
     using namespace gatcore::models;
     const bool weights = name.rfind("neuroskinning", 0) == 0;
     ModelConfig cfg = ModelConfig::defaults(name, kFeatures, weights ? kBones : 3);
@@ -85,6 +96,7 @@ struct ModelCase {
   }
 
   float step() const {
+    gatcore::ProductPrecisionScope scope(precision);
     gatcore::Var loss = gatcore::models::task_loss(model->config(), model->forward(batch, true), batch.target);
     adam->zero_grad();
     gatcore::backward(loss);

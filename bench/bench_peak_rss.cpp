@@ -24,7 +24,7 @@ long max_rss_kib() {
 int peak_rss_main(const std::string& name, int steps) {
   for (const auto& [bench, w] : train_workloads()) {
     if (bench != name) continue;
-    ModelCase c(w.name, w.batch, w.vertices);
+    ModelCase c(w.name, w.batch, w.vertices, w.precision);
     const long base = max_rss_kib();
     std::vector<double> ms;
     for (int s = 0; s < steps; ++s) {

@@ -177,6 +177,11 @@ void print_model(const std::string& path) {
   std::printf("trained    %s epochs, lr %s, %s Adam steps%s\n", metadata(l.file, "epoch", "0").c_str(),
               metadata(l.file, "lr").c_str(), metadata(l.file, "adam_steps", "0").c_str(),
               optim ? " (resumable: optimiser state saved)" : "");
+  // Checkpoints from before gat train --precision trained in fp32.
+  std::printf("precision  %s training products", metadata(l.file, "precision", "fp32").c_str());
+  if (l.file.metadata.count("precision_requested"))
+    std::printf(" (%s requested; this machine ran fp32)", l.file.metadata.at("precision_requested").c_str());
+  std::printf("\n");
   std::printf("data       %s", metadata(l.file, "data").c_str());
   if (l.file.metadata.count("data_path")) std::printf(" %s", l.file.metadata.at("data_path").c_str());
   std::printf("\n");
