@@ -247,10 +247,13 @@ void gemm_rows(const float* a, std::int64_t lda, std::int64_t m, std::int64_t k,
 // ---- training operands (gemm_bf16.hpp: pack_b_bf16_strided_avx512, bf16_pairs_strided_avx512) ----
 
 // 16 pair words from two rows of 16 lanes: lane l = bf16(r0[l]) | bf16(r1[l]) << 16.
+// One conversion of both rows (r0's 16 halves, then r1's) and one VPERMW
+// interleaving them.
 inline __m512i pairs_of_rows(__m512 r0, __m512 r1) {
-  const __m512i lo = _mm512_cvtepu16_epi32((__m256i)_mm512_cvtneps_pbh(r0));
-  const __m512i hi = _mm512_cvtepu16_epi32((__m256i)_mm512_cvtneps_pbh(r1));
-  return _mm512_or_si512(lo, _mm512_slli_epi32(hi, 16));
+  const __m512i both = (__m512i)_mm512_cvtne2ps_pbh(r1, r0);
+  const __m512i interleave = _mm512_set_epi16(31, 15, 30, 14, 29, 13, 28, 12, 27, 11, 26, 10, 25, 9, 24, 8, 23, 7,
+                                              22, 6, 21, 5, 20, 4, 19, 3, 18, 2, 17, 1, 16, 0);
+  return _mm512_permutexvar_epi16(interleave, both);
 }
 // 16 pair words from 32 consecutive values x[0, count) (zeros past count).
 inline __m512i pairs_of_run(const float* x, std::int64_t count) {

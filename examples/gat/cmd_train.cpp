@@ -371,11 +371,12 @@ int run_train(TrainArgs a) {
                                     : std::string("displacement, ") + displacement_loss_name(cfg.loss) + " loss";
   if (root)
     std::printf("gat train: %s (%s), %lld parameters, %s: %zu training / %zu validation samples, "
-                "batch %d, %d threads, device %s%s\n",
+                "batch %d, %d threads, device %s%s%s\n",
                 cfg.name.c_str(), task_text.c_str(), static_cast<long long>(model->registry().num_parameters()),
                 source.c_str(), train.size(), val.size(), opt.batch_size, omp_get_max_threads(),
                 dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu",
-                comm.size() > 1 ? (", " + std::to_string(comm.size()) + " MPI ranks (data parallel)").c_str() : "");
+                comm.size() > 1 ? (", " + std::to_string(comm.size()) + " MPI ranks (data parallel)").c_str() : "",
+                trainer.options().precision == Precision::bf16 ? ", bf16 products" : "");
   std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
                                            {"samples", std::to_string(samples)},
                                            {"batch", std::to_string(opt.batch_size)},
