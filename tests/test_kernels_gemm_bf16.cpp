@@ -17,6 +17,7 @@
 #include "kernels/elementwise.hpp"
 #include "kernels/gemm.hpp"
 #include "kernels/gemm_bf16.hpp"
+#include "reference/bf16_reference.hpp"
 #include "reference/nn_reference.hpp"
 
 using namespace gatcore;
@@ -33,12 +34,6 @@ struct Mkn {
 const Mkn kShapes[] = {{1, 1, 1},    {5, 3, 2},      {37, 17, 8},   {121, 193, 16}, {250, 385, 17},
                        {26, 64, 81}, {13, 600, 33},  {49, 770, 72}, {530, 40, 20},  {20, 1601, 24},
                        {9, 2101, 33}, {60, 300, 130}, {3, 1, 40}};
-
-Mat rounded_bf16(const Tensor& t) {
-  Mat m = ref::to_mat(t);
-  for (double& v : m.v) v = double(cpu::bf16_round(float(v)));
-  return m;
-}
 
 struct Case {
   bool ta, tb;
@@ -67,7 +62,7 @@ TEST_CASE("gemm bf16: the three training products against the double product of 
         const Tensor C0 = random(rng, s.m, s.n, false);
         Mat bound;
         const Mat want =
-            ref::gemm(rounded_bf16(A), c.ta, rounded_bf16(B), c.tb, ref::to_mat(C0), ab.alpha, ab.beta, &bound);
+            ref::gemm(ref::rounded_bf16(A), c.ta, ref::rounded_bf16(B), c.tb, ref::to_mat(C0), ab.alpha, ab.beta, &bound);
         // k sums and the beta C term: (k + 2) roundings of at most u each.
         const double rel = double(s.k + 2) * std::ldexp(1.0, -24) * 1.001;
         std::vector<cpu::SimdLevel> levels = {cpu::SimdLevel::scalar};  // below AVX-512: the portable product

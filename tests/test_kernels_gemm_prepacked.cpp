@@ -19,6 +19,7 @@
 #include "kernels/gemm.hpp"
 #include "kernels/gemm_bf16.hpp"
 #include "kernels/gemm_prepacked.hpp"
+#include "reference/bf16_reference.hpp"
 #include "reference/nn_reference.hpp"
 
 using namespace gatcore;
@@ -39,12 +40,6 @@ bool same_bits(const Tensor& a, const Tensor& b) {
   for (std::int64_t r = 0; r < a.rows(); ++r)
     if (std::memcmp(a.row(r), b.row(r), sizeof(float) * std::size_t(a.cols())) != 0) return false;
   return true;
-}
-
-Mat rounded_bf16(const Tensor& t) {
-  Mat m = ref::to_mat(t);
-  for (double& v : m.v) v = double(cpu::bf16_round(float(v)));
-  return m;
 }
 
 }  // namespace
@@ -130,7 +125,7 @@ TEST_CASE("gemm_prepacked bf16: portable and AVX512_BF16 products against the do
       const Tensor A = random(rng, s.m, s.k, strided), B = random(rng, s.k, s.n, false);
       const cpu::PrepackedB P = cpu::prepack_b(B, Precision::bf16);
       Mat bound;
-      const Mat want = ref::gemm(rounded_bf16(A), false, rounded_bf16(B), false, Mat(s.m, s.n), 1.0, 0.0, &bound);
+      const Mat want = ref::gemm(ref::rounded_bf16(A), false, ref::rounded_bf16(B), false, Mat(s.m, s.n), 1.0, 0.0, &bound);
       const double rel = double(s.k) * std::ldexp(1.0, -24) * 1.001;
       std::vector<cpu::SimdLevel> levels = {cpu::SimdLevel::scalar};  // below AVX-512: the portable product
       if (hw) levels.push_back(cpu::SimdLevel::avx512);
