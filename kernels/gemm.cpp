@@ -25,7 +25,6 @@
 #include <memory>
 #include <string>
 
-#include "kernels/gemm_bf16.hpp"
 #include "kernels/gemm_impl.hpp"
 #include "kernels/nn_detail.hpp"
 #include "kernels/simd.hpp"
@@ -63,6 +62,17 @@ constexpr std::int64_t kTileN = GATCORE_GEMM_TILE_N;
 constexpr std::int64_t kSplitKBelowTiles = 2;
 constexpr std::int64_t kSplitKMinChunk = 1000;
 constexpr std::int64_t kSplitKMax = 8;
+// ... and the partials are at most 8 MiB (binds only for the larger bf16 tiles).
+constexpr std::int64_t kSplitKMaxPartialFloats = std::int64_t(2) << 20;
+// bf16 tiles: 1024 x 1024. Each tile converts its op(A) rows and op(B)
+// columns to bf16 (weights and activations change every step), one
+// conversion per tile_m tile_n / (tile_m + tile_n) multiply-adds: 1024 x 1024
+// halves the share of 512 x 512 (measured one thread, 24576 x 1088 x 1024:
+// see bench/RESULTS.md).
+#ifndef GATCORE_GEMM_TILE_BF16  // (overridable for tuning experiments)
+#define GATCORE_GEMM_TILE_BF16 1024
+#endif
+constexpr std::int64_t kTileBf16 = GATCORE_GEMM_TILE_BF16;
 // Below this many flops one thread does all tiles (same result, less overhead).
 constexpr double kParallelMinFlops = 4.0e6;
 
@@ -93,6 +103,7 @@ void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Te
       fn = [](const detail::GemmArgs& s) { detail::gemm_bf16_tile(s, true); };
     else
       fn = [](const detail::GemmArgs& s) { detail::gemm_bf16_tile(s, false); };
+    return detail::gemm_tiled(A, trans_a, B, trans_b, C, alpha, beta, fn, kTileBf16, kTileBf16);
   } else {
 #if defined(__x86_64__) && defined(__GNUC__)
     switch (simd_level()) {
@@ -104,11 +115,11 @@ void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Te
     }
 #endif
   }
-  detail::gemm_tiled(A, trans_a, B, trans_b, C, alpha, beta, fn);
+  detail::gemm_tiled(A, trans_a, B, trans_b, C, alpha, beta, fn, kTileM, kTileN);
 }
 
 void detail::gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
-                        float beta, GemmTileFn fn) {
+                        float beta, GemmTileFn fn, std::int64_t tile_m, std::int64_t tile_n) {
   check_cpu_f32(A, "gemm: A");
   check_cpu_f32(B, "gemm: B");
   check_cpu_f32(C, "gemm: C");
@@ -144,12 +155,13 @@ void detail::gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool tra
   // Fixed tiling of C, and a fixed split of k when C has too few tiles to
   // keep the threads busy (weight gradients X^T dY: small C, long k). Both
   // are functions of the shape only.
-  const std::int64_t tiles_m = (m + kTileM - 1) / kTileM, tiles_n = (n + kTileN - 1) / kTileN;
+  const std::int64_t tiles_m = (m + tile_m - 1) / tile_m, tiles_n = (n + tile_n - 1) / tile_n;
   const std::int64_t tiles = tiles_m * tiles_n;
   const double flops = 2.0 * double(m) * double(n) * double(k);
   std::int64_t splits = 1;
   if (tiles < kSplitKBelowTiles && k >= 2 * kSplitKMinChunk)
-    splits = std::min<std::int64_t>(kSplitKMax, k / kSplitKMinChunk);
+    splits = std::max<std::int64_t>(
+        1, std::min({kSplitKMax, k / kSplitKMinChunk, kSplitKMaxPartialFloats / std::max<std::int64_t>(1, m * n)}));
   const std::int64_t kc = (k + splits - 1) / splits;
   splits = (k + kc - 1) / kc;
 
@@ -161,8 +173,8 @@ void detail::gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool tra
 #pragma omp parallel for schedule(static) if (tasks > 1 && flops >= kParallelMinFlops)
   for (std::int64_t task = 0; task < tasks; ++task) {
     const std::int64_t t = task / splits, sp = task % splits;
-    const std::int64_t i0 = (t / tiles_n) * kTileM, j0 = (t % tiles_n) * kTileN;
-    const std::int64_t mi = std::min(kTileM, m - i0), nj = std::min(kTileN, n - j0);
+    const std::int64_t i0 = (t / tiles_n) * tile_m, j0 = (t % tiles_n) * tile_n;
+    const std::int64_t mi = std::min(tile_m, m - i0), nj = std::min(tile_n, n - j0);
     const std::int64_t k0 = sp * kc, kk = std::min(kc, k - k0);
     detail::GemmArgs s = g;
     // Rows i0.. and columns k0.. of op(A) (transposed: columns / rows of A).

@@ -7,7 +7,7 @@
 // Precision::bf16: both operands rounded to bfloat16 (round to nearest even),
 // products accumulated in fp32 (VDPBF16PS on AVX512_BF16 CPUs, a scalar
 // emulation elsewhere: the training products, gemm_bf16_train.cpp); the
-// same tiling, so also deterministic across thread counts.
+// same scheme with 1024×1024 tiles, so also deterministic across thread counts.
 // C must not overlap A or B (a DenseNet prefix and its next slot may share a
 // buffer); beta = 0 ignores C's previous contents (NaN included).
 #include "gatcore/precision.hpp"

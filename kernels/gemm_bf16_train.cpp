@@ -25,8 +25,8 @@
 namespace gatcore::cpu::detail {
 
 namespace {
-// Reused per thread (grown to the largest tile seen: at most 768 x 512 words
-// for B, 536 x 384 words for A, 512 x 512 floats for the alpha / beta pass).
+// Reused per thread (grown to the largest tile seen: at most 384 x 1024 words
+// for B, 1048 x 384 words for A, 1024 x 1024 floats for the alpha / beta pass).
 thread_local std::vector<std::uint32_t> t_bpack, t_apairs;
 thread_local std::vector<float> t_acc, t_portable_a, t_portable_b, t_portable_c;
 

@@ -38,10 +38,10 @@ void gemm_eigen_baseline(const GemmArgs& g);
 // when `hardware` (AVX512_BF16 CPUs only), else its scalar emulation.
 void gemm_bf16_tile(const GemmArgs& g, bool hardware);
 // gemm()'s checks, fixed tiling and threading around a serial tile product
-// (gemm() picks `tile` from the precision and the CPU).
+// (gemm() picks `tile` and the tile size from the precision and the CPU).
 using GemmTileFn = void (*)(const GemmArgs&);
 void gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
-                float beta, GemmTileFn tile);
+                float beta, GemmTileFn tile, std::int64_t tile_m, std::int64_t tile_n);
 // Defined only on x86-64 builds (gemm_avx2.cpp / gemm_avx512.cpp).
 void gemm_eigen_avx2(const GemmArgs& g);
 void gemm_eigen_avx512(const GemmArgs& g);

@@ -4,7 +4,7 @@
 // the bf16-rounded operands (the only error left is fp32 accumulation, k u
 // sum |a b|), through the AVX512_BF16 kernel where the CPU has it and the
 // portable emulation everywhere, the two bitwise equal; odd shapes (k = 1, k
-// odd, k over the 768-deep chunks, several 512 x 512 tiles, a split k), strided
+// odd, k over the 768-deep chunks, several 1024 x 1024 tiles, a split k), strided
 // views of A, B and C, beta = 0 over a NaN-filled C, alpha != 1, beta = 1;
 // 1 vs 2 threads bitwise. And the per-call packing against pack_b_bf16.
 #include <catch2/catch.hpp>
@@ -29,11 +29,13 @@ namespace {
 struct Mkn {
   std::int64_t m, k, n;
 };
-// m around the 120-row blocks and 512-row tiles, k odd / 1 / past a 768 chunk /
-// split (one tile, k >= 2000), n around the 16 .. 80 panel widths.
+// m around the 120-row blocks and 1024-row tiles, k odd / 1 / past a 768 chunk /
+// split (one tile, k >= 2000), n around the 16 .. 80 panel widths, two
+// 512-column blocks and two 1024-column tiles; the 1100-row and k = 2101 shapes
+// are large enough (4 Mflop) to run threaded.
 const Mkn kShapes[] = {{1, 1, 1},    {5, 3, 2},      {37, 17, 8},   {121, 193, 16}, {250, 385, 17},
-                       {26, 64, 81}, {13, 600, 33},  {49, 770, 72}, {530, 40, 20},  {20, 1601, 24},
-                       {9, 2101, 33}, {60, 300, 130}, {3, 1, 40}};
+                       {26, 64, 81}, {13, 600, 33},  {49, 770, 72}, {1100, 64, 40},  {20, 1601, 24},
+                       {40, 2101, 33}, {60, 300, 130}, {3, 1, 40}, {5, 24, 1030}};
 
 struct Case {
   bool ta, tb;
