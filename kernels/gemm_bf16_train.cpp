@@ -1,8 +1,8 @@
 // One tile of gemm(..., Precision::bf16) (gemm.hpp), the training products:
 // C = alpha op(A) op(B) + beta C with both operands rounded to bf16 (round to
 // nearest even, bf16_bits) and products accumulated in fp32. gemm() does the
-// tiling and threading exactly as for fp32, so results do not depend on the
-// thread count.
+// tiling and threading as for fp32 (1024 x 1024 tiles), so results do not
+// depend on the thread count.
 //
 // The inference pieces do the work (gemm_bf16.hpp): operands change every
 // step (weights after each Adam step, activations always), so both are
@@ -10,10 +10,10 @@
 // own row conversion when A is row-major, else (the weight gradient A^T dY,
 // A's columns are op(A)'s rows) into pair words by a 16 x 16 transposing
 // conversion. k runs in chunks of kBf16Kc, the kernel's own k block, each
-// chunk's operands converted just before it is used (a 768 x 512 chunk of B
-// is 768 KiB: it stays in the 1 MiB L2 while the A rows stream past), its
-// sums added to C in chunk order: the same arithmetic as one call over all of
-// k. CPUs without AVX512_BF16 run the scalar emulation (gemm_bf16_portable)
+// chunk's operands converted just before it is used (a chunk's 512-column
+// block of B is 768 KiB, the 1 MiB L2's worth the kernel runs a row block of A
+// over), its sums added to C in chunk order: the same arithmetic as one call
+// over all of k. CPUs without AVX512_BF16 run the scalar emulation (gemm_bf16_portable)
 // on the same chunks, summed the same way: the same results but for denormal
 // partial sums, which VDPBF16PS flushes to zero.
 #include <algorithm>

@@ -22,7 +22,8 @@ bool bf16_supported();
 
 // The precision of training products on this thread, like PyTorch's autocast:
 // the ops whose cost is a product of activations and weights (linear,
-// linear_segment_bias) read it when they run forward and record it on the
+// linear_segment_bias, with at least 16 input columns: smaller products gain
+// nothing) read it when they run forward and record it on the
 // tape, so their backward products (dX = dY W^T, dW = X^T dY) use the same
 // one. Everything else (losses, BatchNorm, softmax, attention, the optimiser
 // and its fp32 master weights) is fp32 whatever the scope says. A backend
