@@ -329,11 +329,18 @@ WORKLOADS = [
     # (name, gatbench benchmark name, label)
     ("gat_layer_fwd", "gat_layer_fwd/nodes:10000/real_time", "GAT layer 64->8x8, 10k nodes, fwd"),
     ("gat_layer_fwdbwd", "gat_layer_fwdbwd/nodes:10000/real_time", "GAT layer 64->8x8, 10k nodes, fwd+bwd"),
-    ("densegats_infer", "model_infer_densegats/nodes:10000/real_time", "DenseGATs inference 1x10k"),
+    # gatcore's inference is the deploy path (what gat deform and the runtime
+    # run; fp32, predict's numbers bitwise); the generic tape-free forward and
+    # bf16 products are shown beside it (EXTRA), against the same torch runs.
+    ("densegats_infer", "model_infer_deploy/densegats/nodes:10000/real_time", "DenseGATs inference 1x10k"),
     ("densegats_train", "model_train/densegats/real_time", "DenseGATs train step 8x1000"),
     ("origat_train", "model_train/origat/real_time", "Ori.GAT train step 8x1000"),
     ("neuroskinning_train", "model_train/neuroskinning/real_time", "NeuroSkinning train step 12x2048"),
 ]
+EXTRA = {  # workload -> gatcore-only rows timed right after it: (gatbench benchmark name, label)
+    "densegats_infer": [("model_infer_densegats/nodes:10000/real_time", "  (generic forward, no deploy plan)"),
+                        ("model_infer_deploy/densegats_bf16/nodes:10000/real_time", "  (deploy path, bf16 products)")],
+}
 PEAK = [("densegats_train", "model_peak_rss/densegats"), ("origat_train", "model_peak_rss/origat"),
         ("neuroskinning_train", "model_peak_rss/neuroskinning")]
 
@@ -500,6 +507,12 @@ def main():
                      "best_pytorch_ms": ok[best] if best else nan, "gatcore_ms": gc,
                      "speedup": (ok[best] / gc) if best else nan, "load1": load1()})
         print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
+        for xname, xlabel in EXTRA.get(name, []):
+            gatbench_time(xname)
+            gx = gatcore_ms(xname)
+            rows.append(dict(rows[-1], workload=xlabel, gatcore_ms=gx,
+                             speedup=(rows[-1]["best_pytorch_ms"] / gx) if best else nan, load1=load1()))
+            print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
     mem = []
     for name, bname in ([] if args.skip_memory else peaks):
         b = bench.get(bname, {})
