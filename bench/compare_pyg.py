@@ -350,6 +350,11 @@ EXTRA = {  # workload -> more gatcore rows timed right after it: (gatbench bench
     "densegats_infer": [("model_infer_densegats/nodes:10000/real_time", "  (generic forward, no deploy plan)", None),
                         ("model_infer_deploy/densegats_bf16/nodes:10000/real_time", "  (bf16 products)",
                          ["eager_bf16", "compiled_bf16"])],
+    # gat train --precision bf16 (products in bf16, everything else fp32) against torch under autocast
+    "densegats_train": [("model_train/densegats_bf16/real_time", "  (bf16 products)", ["eager_bf16", "compiled_bf16"])],
+    "origat_train": [("model_train/origat_bf16/real_time", "  (bf16 products)", ["eager_bf16", "compiled_bf16"])],
+    "neuroskinning_train": [("model_train/neuroskinning_bf16/real_time", "  (bf16 products)",
+                             ["eager_bf16", "compiled_bf16"])],
 }
 PEAK = [("densegats_train", "model_peak_rss/densegats"), ("origat_train", "model_peak_rss/origat"),
         ("neuroskinning_train", "model_peak_rss/neuroskinning")]
