@@ -45,18 +45,21 @@ namespace {
 // Why: a training step allocates and frees the same few hundred large
 // tensors every step; glibc serves them with fresh mmap()s, so every step
 // paid a page fault and a kernel page clear per 4 KiB (about a fifth of a
-// DenseGATs step under perf). Blocks are matched by exact (rounded) size,
+// DenseGATs step under perf). Blocks are matched by (rounded) size,
 // which is what a repeated step asks for; the cache holds at most
 // GATCORE_CPU_CACHE MiB (default 1024; 0 turns it off) so idle memory stays
 // bounded.
 // The cache never makes the process bigger than the most the program has
-// had in use at once (of these blocks): a miss (a size it does not hold)
-// lets go of cached blocks, the longest cached first, while blocks in use +
-// cached + the new one would pass that high-water mark. Without this,
-// blocks of the sizes a step frees late (its forward activations, freed in
-// backward) sat in the cache while the sizes backward asks for were
-// allocated besides them: NeuroSkinning's training step peaked 270 MiB
-// (27 %) above what it uses.
+// had in use at once (of these blocks): a miss lets go of cached blocks, the
+// longest cached first, while blocks in use + cached would pass that
+// high-water mark. Without this, blocks of the sizes a step frees late (its
+// forward activations, freed in backward) sat in the cache while the sizes
+// backward asks for were allocated besides them: NeuroSkinning's training
+// step peaked 270 MiB (27 %) above what it uses. A request may also take a
+// cached block up to 1/8 larger than it asks for (the smallest such): near
+// sizes then share blocks, and fewer misses fault fresh pages in (steady
+// NeuroSkinning step: 93 k page faults instead of 144 k; the cache without
+// a bound had almost none, at +270 MiB; bench/RESULTS.md).
 constexpr std::size_t kBlockCacheMin = std::size_t(256) << 10;  // smaller blocks: malloc is fast enough
 constexpr std::size_t kBlockGranule = std::size_t(64) << 10;    // rounding, so near sizes share blocks
 
@@ -76,34 +79,35 @@ class BlockCache {
     return *c;
   }
   bool enabled() const { return max_ > 0; }
-  // A cached block of exactly `bytes`, or nullptr (the caller allocates
-  // afresh) after letting go of what would take the process past its
-  // high-water mark.
-  void* take(std::size_t bytes) {
-    std::vector<void*> evicted;
-    std::vector<std::size_t> evicted_bytes;
+  // A cached block of `bytes` to bytes + bytes/8 (its size in *capacity),
+  // or nullptr (the caller allocates `bytes` afresh) after letting go of
+  // what would take the process past its high-water mark.
+  void* take(std::size_t bytes, std::size_t* capacity) {
+    std::vector<Block> evicted;
+    void* hit = nullptr;
     {
       std::lock_guard<std::mutex> lock(mu_);
-      in_use_ += bytes;
-      auto it = by_size_.find(bytes);
-      if (it != by_size_.end()) {
-        void* p = it->second->ptr;
+      auto it = by_size_.lower_bound(bytes);
+      if (it != by_size_.end() && it->first <= bytes + bytes / 8) {
+        hit = it->second->ptr;
+        *capacity = it->first;
+        cached_ -= it->first;
+        in_use_ += it->first;
         by_age_.erase(it->second);
         by_size_.erase(it);
-        cached_ -= bytes;
-        return p;
+        return hit;
       }
+      in_use_ += bytes;
+      *capacity = bytes;
       high_water_ = std::max(high_water_, in_use_);
       while (in_use_ + cached_ > high_water_ && !by_age_.empty()) {
-        const Block& b = by_age_.front();
-        cached_ -= b.bytes;
-        evicted.push_back(b.ptr);
-        evicted_bytes.push_back(b.bytes);
+        evicted.push_back(by_age_.front());
+        cached_ -= by_age_.front().bytes;
         erase_from_size_index(by_age_.begin());
         by_age_.pop_front();
       }
     }
-    for (std::size_t k = 0; k < evicted.size(); ++k) unmap_block(evicted[k], evicted_bytes[k]);
+    for (const Block& b : evicted) unmap_block(b.ptr, b.bytes);
     return nullptr;
   }
   // Keeps the block if there is room, else frees it.
@@ -165,9 +169,9 @@ std::size_t block_bytes(std::size_t bytes) {
 static void release_cpu(Storage& s) {
   const std::size_t rounded = block_bytes(s.bytes);
   if (rounded >= kBlockCacheMin && BlockCache::get().enabled())
-    BlockCache::get().give(s.host, rounded);
+    BlockCache::get().give(s.host, s.capacity);
   else if (rounded >= kBlockCacheMin)
-    unmap_block(s.host, rounded);
+    unmap_block(s.host, s.capacity);
   else
     std::free(s.host);
 }
@@ -176,7 +180,8 @@ std::shared_ptr<Storage> Storage::allocate_cpu(std::size_t bytes) {
   auto s = std::make_shared<Storage>();
   const std::size_t rounded = block_bytes(bytes);
   const bool cached = rounded >= kBlockCacheMin && BlockCache::get().enabled();
-  if (cached) s->host = BlockCache::get().take(rounded);
+  s->capacity = rounded;
+  if (cached) s->host = BlockCache::get().take(rounded, &s->capacity);
   if (!s->host) s->host = rounded >= kBlockCacheMin ? map_block(rounded) : std::aligned_alloc(64, rounded);
   if (!s->host) {
     if (cached) BlockCache::get().untake(rounded);
