@@ -13,6 +13,7 @@
 #include <list>
 #include <map>
 #include <mutex>
+#include <unordered_map>
 #include <vector>
 
 namespace gatcore {
@@ -59,7 +60,8 @@ namespace {
 // cached block up to 1/8 larger than it asks for (the smallest such): near
 // sizes then share blocks, and fewer misses fault fresh pages in (steady
 // NeuroSkinning step: 93 k page faults instead of 144 k; the cache without
-// a bound had almost none, at +270 MiB; bench/RESULTS.md).
+// a bound had almost none, at +270 MiB; bench/RESULTS.md). Such a block
+// goes back to the cache at its own size.
 constexpr std::size_t kBlockCacheMin = std::size_t(256) << 10;  // smaller blocks: malloc is fast enough
 constexpr std::size_t kBlockGranule = std::size_t(64) << 10;    // rounding, so near sizes share blocks
 
@@ -79,10 +81,10 @@ class BlockCache {
     return *c;
   }
   bool enabled() const { return max_ > 0; }
-  // A cached block of `bytes` to bytes + bytes/8 (its size in *capacity),
-  // or nullptr (the caller allocates `bytes` afresh) after letting go of
-  // what would take the process past its high-water mark.
-  void* take(std::size_t bytes, std::size_t* capacity) {
+  // A cached block of `bytes` to bytes + bytes/8, or nullptr (the caller
+  // allocates `bytes` afresh) after letting go of what would take the
+  // process past its high-water mark.
+  void* take(std::size_t bytes) {
     std::vector<Block> evicted;
     void* hit = nullptr;
     {
@@ -90,7 +92,7 @@ class BlockCache {
       auto it = by_size_.lower_bound(bytes);
       if (it != by_size_.end() && it->first <= bytes + bytes / 8) {
         hit = it->second->ptr;
-        *capacity = it->first;
+        if (it->first != bytes) larger_.emplace(hit, it->first);
         cached_ -= it->first;
         in_use_ += it->first;
         by_age_.erase(it->second);
@@ -98,7 +100,6 @@ class BlockCache {
         return hit;
       }
       in_use_ += bytes;
-      *capacity = bytes;
       high_water_ = std::max(high_water_, in_use_);
       while (in_use_ + cached_ > high_water_ && !by_age_.empty()) {
         evicted.push_back(by_age_.front());
@@ -110,10 +111,14 @@ class BlockCache {
     for (const Block& b : evicted) unmap_block(b.ptr, b.bytes);
     return nullptr;
   }
-  // Keeps the block if there is room, else frees it.
+  // Keeps the block (asked for as `bytes`) if there is room, else frees it.
   void give(void* p, std::size_t bytes) {
     {
       std::lock_guard<std::mutex> lock(mu_);
+      if (auto l = larger_.find(p); l != larger_.end()) {
+        bytes = l->second;
+        larger_.erase(l);
+      }
       in_use_ -= bytes;
       if (cached_ + bytes <= max_) {
         by_age_.push_back(Block{p, bytes});
@@ -151,6 +156,7 @@ class BlockCache {
   std::mutex mu_;
   std::list<Block> by_age_;                 // oldest first
   std::multimap<std::size_t, AgeIt> by_size_;
+  std::unordered_map<void*, std::size_t> larger_;  // blocks in use that are larger than asked for: their size
   std::size_t cached_ = 0;
   std::size_t in_use_ = 0, high_water_ = 0;  // bytes of the blocks handed out (by take())
   std::size_t max_ = 0;
@@ -169,9 +175,9 @@ std::size_t block_bytes(std::size_t bytes) {
 static void release_cpu(Storage& s) {
   const std::size_t rounded = block_bytes(s.bytes);
   if (rounded >= kBlockCacheMin && BlockCache::get().enabled())
-    BlockCache::get().give(s.host, s.capacity);
+    BlockCache::get().give(s.host, rounded);
   else if (rounded >= kBlockCacheMin)
-    unmap_block(s.host, s.capacity);
+    unmap_block(s.host, rounded);
   else
     std::free(s.host);
 }
@@ -180,8 +186,7 @@ std::shared_ptr<Storage> Storage::allocate_cpu(std::size_t bytes) {
   auto s = std::make_shared<Storage>();
   const std::size_t rounded = block_bytes(bytes);
   const bool cached = rounded >= kBlockCacheMin && BlockCache::get().enabled();
-  s->capacity = rounded;
-  if (cached) s->host = BlockCache::get().take(rounded, &s->capacity);
+  if (cached) s->host = BlockCache::get().take(rounded);
   if (!s->host) s->host = rounded >= kBlockCacheMin ? map_block(rounded) : std::aligned_alloc(64, rounded);
   if (!s->host) {
     if (cached) BlockCache::get().untake(rounded);

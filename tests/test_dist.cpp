@@ -51,6 +51,24 @@ Tensor rows_of(const Tensor& t, std::int64_t r0, std::int64_t r1) {
   return o;
 }
 
+// Each part's outputs and input gradients are the whole batch's rows; its
+// parameter gradients are its rows' shares, which add up to the whole's.
+void check_parts_match_whole(const std::int64_t* cut, const std::vector<Tensor>& py, const std::vector<Tensor>& pdx,
+                             const std::vector<Tensor>& pdg, const std::vector<Tensor>& pdb, const Tensor& y,
+                             const Tensor& dx, const Tensor& dg, const Tensor& db) {
+  const std::int64_t C = y.cols();
+  for (int p = 0; p < 3; ++p)
+    for (std::int64_t i = cut[p]; i < cut[p + 1]; ++i)
+      for (std::int64_t c = 0; c < C; ++c) {
+        CHECK(py[p].at(i - cut[p], c) == Approx(y.at(i, c)).margin(1e-5));
+        CHECK(pdx[p].at(i - cut[p], c) == Approx(dx.at(i, c)).margin(1e-5));
+      }
+  for (std::int64_t c = 0; c < C; ++c) {
+    CHECK(pdg[0].at(0, c) + pdg[1].at(0, c) + pdg[2].at(0, c) == Approx(dg.at(0, c)).margin(1e-4));
+    CHECK(pdb[0].at(0, c) + pdb[1].at(0, c) + pdb[2].at(0, c) == Approx(db.at(0, c)).margin(1e-4));
+  }
+}
+
 }  // namespace
 
 TEST_CASE("share_of: contiguous shares in rank order cover the batch once, sizes differ by at most one") {
@@ -106,17 +124,8 @@ TEST_CASE("SyncBatchNorm: a batch split over 3 parts gives the whole batch's sta
       CHECK(prm[p].at(0, c) == Approx(rm.at(0, c)).margin(1e-6));
       CHECK(prv[p].at(0, c) == Approx(rv.at(0, c)).epsilon(1e-6));
     }
-    for (std::int64_t i = cut[p]; i < cut[p + 1]; ++i)
-      for (std::int64_t c = 0; c < C; ++c) {
-        CHECK(py[p].at(i - cut[p], c) == Approx(y.at(i, c)).margin(1e-5));
-        CHECK(pdx[p].at(i - cut[p], c) == Approx(dx.at(i, c)).margin(1e-5));
-      }
   }
-  // Parameter gradients: each part holds its rows' share; the shares add up.
-  for (std::int64_t c = 0; c < C; ++c) {
-    CHECK(pdg[0].at(0, c) + pdg[1].at(0, c) + pdg[2].at(0, c) == Approx(dg.at(0, c)).margin(1e-4));
-    CHECK(pdb[0].at(0, c) + pdb[1].at(0, c) + pdb[2].at(0, c) == Approx(db.at(0, c)).margin(1e-4));
-  }
+  check_parts_match_whole(cut, py, pdx, pdg, pdb, y, dx, dg, db);
 }
 
 TEST_CASE("SyncBatchNorm fused with LeakyReLU: a batch split over 3 parts gives the whole batch's outputs and "
@@ -146,16 +155,7 @@ TEST_CASE("SyncBatchNorm fused with LeakyReLU: a batch split over 3 parts gives 
             [&ts, p](double* v, std::size_t k) { ts.sum(p, v, k); });
     });
   for (auto& t : threads) t.join();
-  for (int p = 0; p < 3; ++p)
-    for (std::int64_t i = cut[p]; i < cut[p + 1]; ++i)
-      for (std::int64_t c = 0; c < C; ++c) {
-        CHECK(py[p].at(i - cut[p], c) == Approx(y.at(i, c)).margin(1e-5));
-        CHECK(pdx[p].at(i - cut[p], c) == Approx(dx.at(i, c)).margin(1e-5));
-      }
-  for (std::int64_t c = 0; c < C; ++c) {
-    CHECK(pdg[0].at(0, c) + pdg[1].at(0, c) + pdg[2].at(0, c) == Approx(dg.at(0, c)).margin(1e-4));
-    CHECK(pdb[0].at(0, c) + pdb[1].at(0, c) + pdb[2].at(0, c) == Approx(db.at(0, c)).margin(1e-4));
-  }
+  check_parts_match_whole(cut, py, pdx, pdg, pdb, y, dx, dg, db);
 }
 
 TEST_CASE("Dropout under a batch split: each part's mask is its rows of the whole batch's, the stream ends alike") {

@@ -28,7 +28,6 @@ const char* device_name(Device d);
 struct Storage {
   void* host = nullptr;
   std::size_t bytes = 0;
-  std::size_t capacity = 0;  // CPU: the bytes of the block behind host (>= bytes)
   Device device = Device::cpu;
   void* handle = nullptr;
   void (*release)(Storage&) = nullptr;
