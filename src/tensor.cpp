@@ -56,11 +56,11 @@ namespace {
 // high-water mark. Without this, blocks of the sizes a step frees late (its
 // forward activations, freed in backward) sat in the cache while the sizes
 // backward asks for were allocated besides them: NeuroSkinning's training
-// step peaked 270 MiB (27 %) above what it uses. A request may also take a
+// step peaked 262 MiB (27 %) above what it uses. A request may also take a
 // cached block up to 1/8 larger than it asks for (the smallest such): near
 // sizes then share blocks, and fewer misses fault fresh pages in (steady
 // NeuroSkinning step: 93 k page faults instead of 144 k; the cache without
-// a bound had almost none, at +270 MiB; bench/RESULTS.md). Such a block
+// a bound had almost none, at +262 MiB; bench/RESULTS.md). Such a block
 // goes back to the cache at its own size.
 constexpr std::size_t kBlockCacheMin = std::size_t(256) << 10;  // smaller blocks: malloc is fast enough
 constexpr std::size_t kBlockGranule = std::size_t(64) << 10;    // rounding, so near sizes share blocks
