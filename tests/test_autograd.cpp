@@ -307,46 +307,46 @@ TEST_CASE("batch_norm_act(_linear) give the values, running statistics and gradi
   const Tensor gamma = random_tensor(1, 24, rng, -1.5f, 1.5f), beta = random_tensor(1, 24, rng);
   const Tensor W = random_tensor(24, 7, rng), b = random_tensor(1, 7, rng), R = random_tensor(600, 7, rng);
   for (Activation f : {Activation::leaky_relu, Activation::relu}) {
-      INFO(activation_name(f));
-      struct Run {
-        Tensor out, act, dx, dg, db, dW, dbias;
-        BatchNormState st;
+    INFO(activation_name(f));
+    struct Run {
+      Tensor out, dx, dg, db, dW, dbias;
+      BatchNormState st;
+    };
+    auto run = [&](bool fuse, bool with_linear) {
+      Run r;
+      Var xw(wide.clone(), true), g(gamma.clone(), true), be(beta.clone(), true), w(W.clone(), true),
+          bi(b.clone(), true);
+      const Var x = xw.cols_slice(3, 27);
+      Var out;
+      if (with_linear)
+        out = fuse ? batch_norm_act_linear(x, g, be, r.st, f, 0.1f, w, bi)
+                   : linear(activation(f, batch_norm(x, g, be, r.st, true), 0.1f), w, bi);
+      else
+        out = fuse ? batch_norm_act(x, g, be, r.st, f, 0.1f) : activation(f, batch_norm(x, g, be, r.st, true), 0.1f);
+      r.out = out.value().clone();
+      backward(sum(mul(out, Var(with_linear ? R : wide.cols_slice(0, 24)))));
+      r.dx = x.grad(), r.dg = g.grad(), r.db = be.grad();
+      if (with_linear) r.dW = w.grad(), r.dbias = bi.grad();
+      return r;
+    };
+    for (bool with_linear : {false, true}) {
+      INFO("with_linear " << with_linear);
+      const Run a = run(true, with_linear), e = run(false, with_linear);
+      auto close = [](const Tensor& t, const Tensor& u, double tol) {
+        REQUIRE(t.defined());
+        REQUIRE(t.same_shape(u));
+        for (std::int64_t i = 0; i < t.rows(); ++i)
+          for (std::int64_t j = 0; j < t.cols(); ++j)
+            REQUIRE(t.at(i, j) == Approx(u.at(i, j)).margin(tol * (1.0 + std::abs(u.at(i, j)))));
       };
-      auto run = [&](bool fuse, bool with_linear) {
-        Run r;
-        Var xw(wide.clone(), true), g(gamma.clone(), true), be(beta.clone(), true), w(W.clone(), true),
-            bi(b.clone(), true);
-        const Var x = xw.cols_slice(3, 27);
-        Var out;
-        if (with_linear)
-          out = fuse ? batch_norm_act_linear(x, g, be, r.st, f, 0.1f, w, bi)
-                     : linear(activation(f, batch_norm(x, g, be, r.st, true), 0.1f), w, bi);
-        else
-          out = fuse ? batch_norm_act(x, g, be, r.st, f, 0.1f) : activation(f, batch_norm(x, g, be, r.st, true), 0.1f);
-        r.out = out.value().clone();
-        backward(sum(mul(out, Var(with_linear ? R : wide.cols_slice(0, 24)))));
-        r.dx = x.grad(), r.dg = g.grad(), r.db = be.grad();
-        if (with_linear) r.dW = w.grad(), r.dbias = bi.grad();
-        return r;
-      };
-      for (bool with_linear : {false, true}) {
-        INFO("with_linear " << with_linear);
-        const Run a = run(true, with_linear), e = run(false, with_linear);
-        auto close = [](const Tensor& t, const Tensor& u, double tol) {
-          REQUIRE(t.defined());
-          REQUIRE(t.same_shape(u));
-          for (std::int64_t i = 0; i < t.rows(); ++i)
-            for (std::int64_t j = 0; j < t.cols(); ++j)
-              REQUIRE(t.at(i, j) == Approx(u.at(i, j)).margin(tol * (1.0 + std::abs(u.at(i, j)))));
-        };
-        close(a.out, e.out, 1e-6);
-        close(a.st.running_mean, e.st.running_mean, 0.0);
-        close(a.st.running_var, e.st.running_var, 0.0);
-        close(a.dx, e.dx, 1e-5);
-        close(a.dg, e.dg, 1e-5);
-        close(a.db, e.db, 1e-5);
-        if (with_linear) close(a.dW, e.dW, 1e-5), close(a.dbias, e.dbias, 1e-6);
-      }
+      close(a.out, e.out, 1e-6);
+      close(a.st.running_mean, e.st.running_mean, 0.0);
+      close(a.st.running_var, e.st.running_var, 0.0);
+      close(a.dx, e.dx, 1e-5);
+      close(a.dg, e.dg, 1e-5);
+      close(a.db, e.db, 1e-5);
+      if (with_linear) close(a.dW, e.dW, 1e-5), close(a.dbias, e.dbias, 1e-6);
+    }
   }
 }
 

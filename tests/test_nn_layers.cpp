@@ -127,7 +127,8 @@ TEST_CASE("a training MLP runs BatchNorm → LeakyReLU fused with the next Linea
     CHECK(fused_nodes == (dropout > 0.f ? 10 : 4));
     backward(sum(mul(out, Var(R))));
     for (std::int64_t i = 0; i < y.rows(); ++i)
-      for (std::int64_t j = 0; j < y.cols(); ++j) REQUIRE(out.value().at(i, j) == Approx(y.value().at(i, j)).margin(1e-5));
+      for (std::int64_t j = 0; j < y.cols(); ++j)
+        REQUIRE(out.value().at(i, j) == Approx(y.value().at(i, j)).margin(1e-5));
     for (std::size_t k = 0; k < 3; ++k)
       for (std::int64_t c = 0; c < mlp.layers[k].out(); ++c) {
         CHECK(mlp.layers[k].bn.state.running_mean.at(0, c) == st[k].running_mean.at(0, c));

@@ -110,7 +110,8 @@ Var batch_norm_act_linear(const Var& x, const Var& gamma, const Var& beta, Batch
       Tensor a = s.be->empty(xv.rows(), xv.cols());
       if (Wi->requires_grad) {
         s.be->batchnorm_act_apply(xv, s.gamma.get(op), s.beta.get(op), s.eps, s.f, s.slope, s.mean, s.affine, a);
-        accumulate_grad(*s.be, Wi, [&](const Tensor& dW, float beta) { linear_weight_grad(*s.be, a, d_out, dW, beta); });
+        accumulate_grad(*s.be, Wi,
+                        [&](const Tensor& dW, float beta) { linear_weight_grad(*s.be, a, d_out, dW, beta); });
       }
       if (lbi && lbi->requires_grad) s.be->column_sums_accumulate(d_out, lbi->grad_or_zeros());
       if (!want_input && !s.across) return;
