@@ -4,6 +4,13 @@
 //                              timed (the trainer does it on the host, once
 //                              per step, and it is the same for every model)
 //   model_infer/densegats      one 10k-vertex character, BatchNorm folded, no tape
+//                              (Model::forward: the tape-free generic path)
+//   model_infer_deploy/densegats[_bf16]
+//                              the same character and weights through the
+//                              deploy path (models/deploy.hpp: weights packed
+//                              once, buffers allocated once), which gat deform
+//                              and the runtime run; fp32 gives predict's
+//                              numbers bitwise, _bf16 bf16 products
 //   model_peak_rss/<name>      peak resident memory of a fresh gatbench process
 //                              that only builds the workload and runs training
 //                              steps (--gatbench_peak_rss, bench_main.cpp)
@@ -14,12 +21,15 @@
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <memory>
 #include <string>
 
 #include "bench/bench_models.hpp"
+#include "gatcore/models/deploy.hpp"
+#include "gatcore/precision.hpp"
 #include "gatcore/ops.hpp"
 
 namespace {
@@ -60,6 +70,41 @@ void model_infer_densegats(benchmark::State& state) {
   gatbench::run(state, gatbench::Cost{0, forward_gemm_flops(*c.model, n), n}, [&] { c.infer(); });
 }
 BENCHMARK(model_infer_densegats)->ArgName("nodes")->Arg(10000)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+struct DeployCase {
+  std::unique_ptr<gatcore::models::DeployPlan> plan;
+  double flops = 0;
+};
+
+void model_infer_deploy(benchmark::State& state, gatcore::Precision precision) {
+  const std::int64_t n = state.range(0);
+  if (precision == gatcore::Precision::bf16 && !gatcore::bf16_supported()) {
+    state.SkipWithError("bf16: this CPU has no AVX512_BF16");
+    return;
+  }
+  auto& c = gatbench::cached<DeployCase>(
+      "densegats_deploy" + std::string(gatcore::precision_name(precision)) + std::to_string(n), [&] {
+        ModelCase m("densegats", 1, n);  // the model_infer_densegats character and weights
+        DeployCase d;
+        d.flops = forward_gemm_flops(*m.model, n);
+        gatcore::models::Normaliser norm;  // identity: the features are already on a unit scale
+        norm.mean = Tensor::zeros(1, gatbench::kFeatures);
+        norm.inv_std = Tensor::full(1, gatbench::kFeatures, 1.0f);
+        auto dm = gatcore::models::make_deploy_model(*m.model, norm, gatcore::Device::cpu, precision);
+        d.plan = std::make_unique<gatcore::models::DeployPlan>(dm, m.batch.graph);
+        const Tensor& x = m.batch.x;
+        for (std::int64_t r = 0; r < n; ++r) std::copy(x.row(r), x.row(r) + x.cols(), d.plan->input().row(r));
+        return d;
+      });
+  state.SetLabel(std::string("1 character, deploy path, ") + gatcore::precision_name(precision));
+  // run() normalises input() in place: with the identity normaliser the input stays the same.
+  gatbench::run(state, gatbench::Cost{0, c.flops, n},
+                [&] { benchmark::DoNotOptimize(c.plan->run().data()); });
+}
+BENCHMARK_CAPTURE(model_infer_deploy, densegats, gatcore::Precision::fp32)
+    ->ArgName("nodes")->Arg(10000)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(model_infer_deploy, densegats_bf16, gatcore::Precision::bf16)
+    ->ArgName("nodes")->Arg(10000)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 // Runs `gatbench --gatbench_peak_rss=<name>` and reads its "base peak" line (KiB).
 void model_peak_rss(benchmark::State& state, const std::string& name) {
@@ -135,6 +180,8 @@ BENCHMARK(gat_layer_fwdbwd)->ArgName("nodes")->Arg(1000)->Arg(10000)->UseRealTim
 
 const bool registered = [] {
   for (const auto& [bench, w] : gatbench::train_workloads()) {
+    // bf16 steps only where they run bf16 (compare_pyg skips the missing rows).
+    if (w.precision == gatcore::Precision::bf16 && !gatcore::bf16_supported()) continue;
     benchmark::RegisterBenchmark(("model_train/" + w.name + w.suffix()).c_str(), model_train, w)
         ->UseRealTime()
         ->Unit(benchmark::kMillisecond);

@@ -24,6 +24,10 @@ long max_rss_kib() {
 int peak_rss_main(const std::string& name, int steps) {
   for (const auto& [bench, w] : train_workloads()) {
     if (bench != name) continue;
+    if (w.precision == gatcore::Precision::bf16 && !gatcore::bf16_supported()) {
+      std::fprintf(stderr, "gatbench: %s needs a CPU with AVX512_BF16\n", name.c_str());
+      return 2;
+    }
     ModelCase c(w.name, w.batch, w.vertices, w.precision);
     const long base = max_rss_kib();
     std::vector<double> ms;

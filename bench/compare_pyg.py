@@ -257,8 +257,11 @@ def pool_matrix(torch, characters, vertices, src, dst, k):
     return torch.sparse_coo_tensor(torch.tensor([r, c]), torch.tensor(v), (n, n)).coalesce()
 
 
-def make_workload(name, torch, pyg, compiled=False):
-    """Returns the step function of a workload; compiled: the model under torch.compile."""
+def make_workload(name, torch, pyg, compiled=False, bf16=False):
+    """Returns the step function of a workload; compiled: the model under torch.compile; bf16: the forward
+    under torch.autocast("cpu", bfloat16) (PyTorch's mixed precision: products in bf16, weights, optimiser
+    and loss in fp32), the reference for gatcore's bf16 rows."""
+    import contextlib
     F = torch.nn.functional
     DenseGats, OriGat, NeuroSkinning = build_models(torch, pyg)
     gen = torch.Generator().manual_seed(1)
@@ -266,13 +269,18 @@ def make_workload(name, torch, pyg, compiled=False):
     def maybe_compile(m):
         return torch.compile(m) if compiled else m
 
+    def amp():
+        return torch.autocast("cpu", dtype=torch.bfloat16) if bf16 else contextlib.nullcontext()
+
     def train_step(model, x, ei, target, loss_fn, extra=()):
         opt = torch.optim.Adam(model.parameters(), lr=1e-3)
         run = maybe_compile(model)
 
         def step():
             opt.zero_grad(set_to_none=True)
-            loss = loss_fn(run(x, ei, *extra), target)
+            with amp():
+                out = run(x, ei, *extra)
+            loss = loss_fn(out.float(), target)
             loss.backward()
             opt.step()
         return step
@@ -301,7 +309,7 @@ def make_workload(name, torch, pyg, compiled=False):
         run = maybe_compile(model)
 
         def infer():
-            with torch.no_grad():
+            with torch.no_grad(), amp():
                 run(x, ei)
         return infer
     if name in ("densegats_train", "origat_train"):
@@ -329,11 +337,25 @@ WORKLOADS = [
     # (name, gatbench benchmark name, label)
     ("gat_layer_fwd", "gat_layer_fwd/nodes:10000/real_time", "GAT layer 64->8x8, 10k nodes, fwd"),
     ("gat_layer_fwdbwd", "gat_layer_fwdbwd/nodes:10000/real_time", "GAT layer 64->8x8, 10k nodes, fwd+bwd"),
-    ("densegats_infer", "model_infer_densegats/nodes:10000/real_time", "DenseGATs inference 1x10k"),
+    # gatcore's inference is the deploy path (what gat deform and the runtime
+    # run; fp32, predict's numbers bitwise); the generic tape-free forward and
+    # bf16 products are shown beside it (EXTRA), against the same torch runs.
+    ("densegats_infer", "model_infer_deploy/densegats/nodes:10000/real_time", "DenseGATs inference 1x10k"),
     ("densegats_train", "model_train/densegats/real_time", "DenseGATs train step 8x1000"),
     ("origat_train", "model_train/origat/real_time", "Ori.GAT train step 8x1000"),
     ("neuroskinning_train", "model_train/neuroskinning/real_time", "NeuroSkinning train step 12x2048"),
 ]
+EXTRA = {  # workload -> more gatcore rows timed right after it: (gatbench benchmark name, label, torch
+    # variants: None = compared with the workload's own torch runs; a list = run these for the row)
+    "densegats_infer": [("model_infer_densegats/nodes:10000/real_time", "  (generic forward, no deploy plan)", None),
+                        ("model_infer_deploy/densegats_bf16/nodes:10000/real_time", "  (bf16 products)",
+                         ["eager_bf16", "compiled_bf16"])],
+    # gat train --precision bf16 (products in bf16, everything else fp32) against torch under autocast
+    "densegats_train": [("model_train/densegats_bf16/real_time", "  (bf16 products)", ["eager_bf16", "compiled_bf16"])],
+    "origat_train": [("model_train/origat_bf16/real_time", "  (bf16 products)", ["eager_bf16", "compiled_bf16"])],
+    "neuroskinning_train": [("model_train/neuroskinning_bf16/real_time", "  (bf16 products)",
+                             ["eager_bf16", "compiled_bf16"])],
+}
 PEAK = [("densegats_train", "model_peak_rss/densegats"), ("origat_train", "model_peak_rss/origat"),
         ("neuroskinning_train", "model_peak_rss/neuroskinning")]
 
@@ -388,7 +410,8 @@ def child(name, mode, args):
                           "config": torch.__config__.show(), "parallel": torch.__config__.parallel_info()}))
         return
     import torch_geometric as pyg
-    fn = make_workload(name, torch, pyg, compiled=args.child_variant == "compiled")
+    fn = make_workload(name, torch, pyg, compiled=args.child_variant.startswith("compiled"),
+                       bf16=args.child_variant.endswith("_bf16"))
     if mode == "time":
         print(json.dumps({"ms": median_ms(fn, args.warmup, args.repeats, args.min_time)}))
     else:
@@ -427,7 +450,8 @@ def main():
     ap.add_argument("--child", default="")
     ap.add_argument("--child-mode", default="time")
     ap.add_argument("--child-variant", default="eager")
-    ap.add_argument("--variants", default="eager,compiled", help="PyTorch variants to time (eager, compiled)")
+    ap.add_argument("--variants", default="eager,compiled",
+                    help="PyTorch variants to time (eager, compiled; eager_bf16 / compiled_bf16: under autocast)")
     ap.add_argument("--skip-gemm", action="store_true", help="no GEMM section")
     args = ap.parse_args()
     if args.child:
@@ -484,6 +508,8 @@ def main():
         return float(open("/proc/loadavg").read().split()[0])
 
     versions = run_child("-", "versions", args) or {}
+    names = set(subprocess.run([args.gatbench, "--benchmark_list_tests"], check=True, capture_output=True,
+                               text=True, env=env).stdout.split())
     rows = []
     for name, bname, label in work:
         # gatcore, then each PyTorch variant, back to back per workload: on a
@@ -500,6 +526,23 @@ def main():
                      "best_pytorch_ms": ok[best] if best else nan, "gatcore_ms": gc,
                      "speedup": (ok[best] / gc) if best else nan, "load1": load1()})
         print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
+        for xname, xlabel, xvariants in EXTRA.get(name, []):
+            if xname not in names and xname.split("/real_time")[0] not in names:
+                continue  # gatbench has no such benchmark (e.g. a bf16 one on a CPU without AVX512_BF16)
+            gatbench_time(xname)
+            gx = gatcore_ms(xname)
+            xpy, xbest = py, best
+            if xvariants:  # torch's own bf16 (autocast) runs, for a like-for-like row
+                xpy = {}
+                for v in xvariants:
+                    r = run_child(name, "time", args, v)
+                    xpy[v] = r["ms"] if r else nan
+                ok = {v: t for v, t in xpy.items() if t == t}
+                xbest = min(ok, key=ok.get) if ok else None
+            rows.append({"workload": xlabel, "pytorch_ms": xpy, "best_variant": xbest,
+                         "best_pytorch_ms": xpy[xbest] if xbest else nan, "gatcore_ms": gx,
+                         "speedup": (xpy[xbest] / gx) if xbest else nan, "load1": load1()})
+            print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
     mem = []
     for name, bname in ([] if args.skip_memory else peaks):
         b = bench.get(bname, {})
@@ -539,8 +582,15 @@ def main():
     head = "".join(f" {('torch ' + v + ' ms'):>19s}" for v in variants)
     print(f"{'workload':40s}{head} {'gatcore ms':>11s} {'best/gatcore':>12s}  load (1 min, after the set)")
     for r in rows:
-        cols = "".join(f" {r['pytorch_ms'][v]:19.2f}" for v in variants)
-        print(f"{r['workload']:40s}{cols} {r['gatcore_ms']:11.2f} {r['speedup']:11.1f}x  {r['load1']:.1f}")
+        # a row with its own torch variants (bf16 rows: autocast) names them
+        own = list(r["pytorch_ms"]) != variants
+        if own:  # the best of its own variants in the first column, each variant in the note
+            cols = f" {r['best_pytorch_ms']:19.2f}" + " " * 20 * (len(variants) - 1)
+            note = "  torch " + ", ".join(f"{v} {t:.2f}" for v, t in r["pytorch_ms"].items()) + " ms (best shown)"
+        else:
+            cols = "".join(f" {r['pytorch_ms'][v]:19.2f}" for v in variants)
+            note = ""
+        print(f"{r['workload']:40s}{cols} {r['gatcore_ms']:11.2f} {r['speedup']:11.1f}x  {r['load1']:.1f}{note}")
     if mem:
         print()
         head = "".join(f" {('torch ' + v):>16s}" for v in variants)

@@ -16,6 +16,7 @@
 #include "kernels/batchnorm.hpp"
 
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 #include "kernels/nn_detail.hpp"
@@ -86,6 +87,29 @@ void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor&
                              const Tensor& d_gamma, const Tensor& d_beta) {
   (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_eval_backward : isa_baseline::batchnorm_eval_backward)(
       x, gamma, running_mean, running_var, eps, d_y, d_x, d_gamma, d_beta);
+}
+
+void batchnorm_act_train_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps, float momentum,
+                                 Activation f, float slope, const Tensor& y, const Tensor& save_mean,
+                                 const Tensor& save_invstd, const Tensor& save_affine, const Tensor& running_mean,
+                                 const Tensor& running_var, const SumAcross& across) {
+  (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_act_train_forward : isa_baseline::batchnorm_act_train_forward)(
+      x, gamma, beta, eps, momentum, f, slope, y, save_mean, save_invstd, save_affine, running_mean, running_var,
+      across);
+}
+
+void batchnorm_act_apply(const Tensor& x, const Tensor& beta, Activation f, float slope, const Tensor& save_mean,
+                         const Tensor& save_affine, const Tensor& y) {
+  (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_act_apply : isa_baseline::batchnorm_act_apply)(x, beta, f, slope,
+                                                                                           save_mean, save_affine, y);
+}
+
+void batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& beta, Activation f, float slope,
+                                  const Tensor& save_mean, const Tensor& save_invstd, const Tensor& save_affine,
+                                  const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta,
+                                  const SumAcross& across) {
+  (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_act_train_backward : isa_baseline::batchnorm_act_train_backward)(
+      x, gamma, beta, f, slope, save_mean, save_invstd, save_affine, d_y, d_x, d_gamma, d_beta, across);
 }
 
 }  // namespace gatcore::cpu

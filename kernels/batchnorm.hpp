@@ -2,6 +2,7 @@
 // BatchNorm1d over the rows (nodes) of x: [n, C]. Statistics in double
 // precision for stability on 10^5 rows. gamma / beta may be undefined (no
 // affine part); training needs at least 2 rows.
+#include "gatcore/activation.hpp"
 #include "gatcore/batch_split.hpp"
 #include "gatcore/tensor.hpp"
 
@@ -39,5 +40,30 @@ void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor
 void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& running_mean,
                              const Tensor& running_var, float eps, const Tensor& d_y, const Tensor& d_x,
                              const Tensor& d_gamma, const Tensor& d_beta);
+
+
+// BatchNorm (training) fused with the activation f that follows it (identity,
+// relu or leaky_relu with `slope`): y = f(BatchNorm(x)) in one pass after the
+// statistics, the same values as batchnorm_train_forward then
+// activation_forward. Saves what backward needs to recompute the normalised
+// value and the activation's sign from x instead of keeping them: save_mean /
+// save_invstd [1, C] (as batchnorm_train_forward's) and save_affine [2, C]
+// (the low part of the mean, gamma·invstd as rounded for the forward).
+void batchnorm_act_train_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps, float momentum,
+                                 Activation f, float slope, const Tensor& y, const Tensor& save_mean,
+                                 const Tensor& save_invstd, const Tensor& save_affine, const Tensor& running_mean,
+                                 const Tensor& running_var, const SumAcross& across = {});
+// y = f(BatchNorm(x)) again from the saved statistics: the forward's values
+// bit for bit (a backward that needs the activation output recomputes it).
+void batchnorm_act_apply(const Tensor& x, const Tensor& beta, Activation f, float slope, const Tensor& save_mean,
+                         const Tensor& save_affine, const Tensor& y);
+// Backward of the fused forward from x, the saved statistics and d_y (the
+// gradient of f's output); accumulates d_x, d_gamma, d_beta (each may be
+// undefined). The same values as activation_backward then
+// batchnorm_train_backward; `across` as there.
+void batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& beta, Activation f, float slope,
+                                  const Tensor& save_mean, const Tensor& save_invstd, const Tensor& save_affine,
+                                  const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta,
+                                  const SumAcross& across = {});
 
 }  // namespace gatcore::cpu

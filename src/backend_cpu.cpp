@@ -98,6 +98,25 @@ class CpuBackend final : public Backend {
                                        const SumAcross& across) override {
     cpu::batchnorm_train_backward(x, gamma, save_mean, save_invstd, d_y, d_x, d_gamma, d_beta, across);
   }
+  void batchnorm_act_train_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
+                                   float momentum, Activation f, float slope, const Tensor& y,
+                                   const Tensor& save_mean, const Tensor& save_invstd, const Tensor& save_affine,
+                                   const Tensor& running_mean, const Tensor& running_var,
+                                   const SumAcross& across) override {
+    cpu::batchnorm_act_train_forward(x, gamma, beta, eps, momentum, f, slope, y, save_mean, save_invstd, save_affine,
+                                     running_mean, running_var, across);
+  }
+  void batchnorm_act_apply(const Tensor& x, const Tensor&, const Tensor& beta, float, Activation f, float slope,
+                           const Tensor& save_mean, const Tensor& save_affine, const Tensor& y) override {
+    cpu::batchnorm_act_apply(x, beta, f, slope, save_mean, save_affine, y);
+  }
+  void batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float, Activation f,
+                                    float slope, const Tensor& save_mean, const Tensor& save_invstd,
+                                    const Tensor& save_affine, const Tensor& d_y, const Tensor& d_x,
+                                    const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across) override {
+    cpu::batchnorm_act_train_backward(x, gamma, beta, f, slope, save_mean, save_invstd, save_affine, d_y, d_x,
+                                      d_gamma, d_beta, across);
+  }
 
   void sum_all(const Tensor& x, const Tensor& out) override {
     out.at(0, 0) = static_cast<float>(cpu::sum_all(x));
@@ -217,6 +236,46 @@ void Backend::batchnorm_train_backward_across(const Tensor&, const Tensor&, cons
                                               const SumAcross&) {
   throw Error("batch_norm: a batch split over processes (SyncBatchNorm) runs on the CPU backend only; "
               "train data-parallel on --device cpu");
+}
+
+// The fused BatchNorm → activation as the unfused kernels: u = BatchNorm(x)
+// into a temporary, then the activation (backward: u again, f'(u) ⊙ d_y,
+// then BatchNorm's backward). save_affine is not used.
+void Backend::batchnorm_act_train_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
+                                          float momentum, Activation f, float slope, const Tensor& y,
+                                          const Tensor& save_mean, const Tensor& save_invstd, const Tensor&,
+                                          const Tensor& running_mean, const Tensor& running_var,
+                                          const SumAcross& across) {
+  Tensor u = empty(x.rows(), x.cols());
+  if (across)
+    batchnorm_train_forward_across(x, gamma, beta, eps, momentum, u, save_mean, save_invstd, running_mean,
+                                   running_var, across);
+  else
+    batchnorm_train_forward(x, gamma, beta, eps, momentum, u, save_mean, save_invstd, running_mean, running_var);
+  activation_forward(f, u, y, slope);
+}
+void Backend::batchnorm_act_apply(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps, Activation f,
+                                  float slope, const Tensor&, const Tensor&, const Tensor& y) {
+  // The batch statistics again (deterministic: the forward's), running statistics left alone.
+  Tensor u = empty(x.rows(), x.cols());
+  batchnorm_train_forward(x, gamma, beta, eps, 0.0f, u, Tensor{}, Tensor{}, Tensor{}, Tensor{});
+  activation_forward(f, u, y, slope);
+}
+void Backend::batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
+                                           Activation f, float slope, const Tensor& save_mean,
+                                           const Tensor& save_invstd, const Tensor&, const Tensor& d_y,
+                                           const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta,
+                                           const SumAcross& across) {
+  Tensor u = empty(x.rows(), x.cols()), d_u = zeros(x.rows(), x.cols());
+  if (across)
+    batchnorm_train_forward_across(x, gamma, beta, eps, 0.0f, u, Tensor{}, Tensor{}, Tensor{}, Tensor{}, across);
+  else
+    batchnorm_train_forward(x, gamma, beta, eps, 0.0f, u, Tensor{}, Tensor{}, Tensor{}, Tensor{});
+  activation_backward(f, u, Tensor{}, d_y, d_u, slope);
+  if (across)
+    batchnorm_train_backward_across(x, gamma, save_mean, save_invstd, d_u, d_x, d_gamma, d_beta, across);
+  else
+    batchnorm_train_backward(x, gamma, save_mean, save_invstd, d_u, d_x, d_gamma, d_beta);
 }
 
 Backend& backend(Device d) {

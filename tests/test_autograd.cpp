@@ -71,6 +71,22 @@ TEST_CASE("gradcheck dense ops", "[autograd]") {
                      [ev](const std::vector<Var>& v) { return batch_norm(v[0], v[1], v[2], *ev, false); },
                      {x, gamma, beta});
   }
+  SECTION("batch norm fused with an activation, and with the next linear") {
+    Tensor x = random_tensor(9, 4, rng, -2.f, 2.f);
+    Tensor gamma = random_tensor(1, 4, rng, 0.5f, 1.5f), beta = random_tensor(1, 4, rng);
+    Tensor W = random_tensor(4, 3, rng), b = random_tensor(1, 3, rng);
+    auto st = std::make_shared<BatchNormState>();
+    for (Activation f : {Activation::leaky_relu, Activation::relu, Activation::identity}) {
+      gradcheck::check(std::string("batch_norm_act ") + activation_name(f),
+                       [st, f](const std::vector<Var>& v) { return batch_norm_act(v[0], v[1], v[2], *st, f, 0.1f); },
+                       {x, gamma, beta});
+      gradcheck::check(std::string("batch_norm_act_linear ") + activation_name(f),
+                       [st, f](const std::vector<Var>& v) {
+                         return batch_norm_act_linear(v[0], v[1], v[2], *st, f, 0.1f, v[3], v[4]);
+                       },
+                       {x, gamma, beta, W, b});
+    }
+  }
   SECTION("sum, mean, losses") {
     Tensor x = random_tensor(4, 3, rng);
     gradcheck::check("sum", [](const std::vector<Var>& v) { return sum(v[0]); }, {x});
@@ -280,6 +296,57 @@ TEST_CASE("linear_segment_bias on row slices gives the values and gradients of l
     REQUIRE(s[k].same_shape(r[k]));
     for (std::int64_t i = 0; i < s[k].rows(); ++i)
       for (std::int64_t j = 0; j < s[k].cols(); ++j) REQUIRE(s[k].at(i, j) == Approx(r[k].at(i, j)).margin(1e-5));
+  }
+}
+
+TEST_CASE("batch_norm_act(_linear) give the values, running statistics and gradients of the unfused ops",
+          "[autograd]") {
+  auto rng = rng_for(11);
+  // 600 rows: more than one reduction block; x a column slice (strided).
+  const Tensor wide = random_tensor(600, 30, rng, -2.f, 3.f);
+  const Tensor gamma = random_tensor(1, 24, rng, -1.5f, 1.5f), beta = random_tensor(1, 24, rng);
+  const Tensor W = random_tensor(24, 7, rng), b = random_tensor(1, 7, rng), R = random_tensor(600, 7, rng);
+  for (Activation f : {Activation::leaky_relu, Activation::relu}) {
+    INFO(activation_name(f));
+    struct Run {
+      Tensor out, dx, dg, db, dW, dbias;
+      BatchNormState st;
+    };
+    auto run = [&](bool fuse, bool with_linear) {
+      Run r;
+      Var xw(wide.clone(), true), g(gamma.clone(), true), be(beta.clone(), true), w(W.clone(), true),
+          bi(b.clone(), true);
+      const Var x = xw.cols_slice(3, 27);
+      Var out;
+      if (with_linear)
+        out = fuse ? batch_norm_act_linear(x, g, be, r.st, f, 0.1f, w, bi)
+                   : linear(activation(f, batch_norm(x, g, be, r.st, true), 0.1f), w, bi);
+      else
+        out = fuse ? batch_norm_act(x, g, be, r.st, f, 0.1f) : activation(f, batch_norm(x, g, be, r.st, true), 0.1f);
+      r.out = out.value().clone();
+      backward(sum(mul(out, Var(with_linear ? R : wide.cols_slice(0, 24)))));
+      r.dx = x.grad(), r.dg = g.grad(), r.db = be.grad();
+      if (with_linear) r.dW = w.grad(), r.dbias = bi.grad();
+      return r;
+    };
+    for (bool with_linear : {false, true}) {
+      INFO("with_linear " << with_linear);
+      const Run a = run(true, with_linear), e = run(false, with_linear);
+      auto close = [](const Tensor& t, const Tensor& u, double tol) {
+        REQUIRE(t.defined());
+        REQUIRE(t.same_shape(u));
+        for (std::int64_t i = 0; i < t.rows(); ++i)
+          for (std::int64_t j = 0; j < t.cols(); ++j)
+            REQUIRE(t.at(i, j) == Approx(u.at(i, j)).margin(tol * (1.0 + std::abs(u.at(i, j)))));
+      };
+      close(a.out, e.out, 1e-6);
+      close(a.st.running_mean, e.st.running_mean, 0.0);
+      close(a.st.running_var, e.st.running_var, 0.0);
+      close(a.dx, e.dx, 1e-5);
+      close(a.dg, e.dg, 1e-5);
+      close(a.db, e.db, 1e-5);
+      if (with_linear) close(a.dW, e.dW, 1e-5), close(a.dbias, e.dbias, 1e-6);
+    }
   }
 }
 

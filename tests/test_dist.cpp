@@ -51,6 +51,24 @@ Tensor rows_of(const Tensor& t, std::int64_t r0, std::int64_t r1) {
   return o;
 }
 
+// Each part's outputs and input gradients are the whole batch's rows; its
+// parameter gradients are its rows' shares, which add up to the whole's.
+void check_parts_match_whole(const std::int64_t* cut, const std::vector<Tensor>& py, const std::vector<Tensor>& pdx,
+                             const std::vector<Tensor>& pdg, const std::vector<Tensor>& pdb, const Tensor& y,
+                             const Tensor& dx, const Tensor& dg, const Tensor& db) {
+  const std::int64_t C = y.cols();
+  for (int p = 0; p < 3; ++p)
+    for (std::int64_t i = cut[p]; i < cut[p + 1]; ++i)
+      for (std::int64_t c = 0; c < C; ++c) {
+        CHECK(py[p].at(i - cut[p], c) == Approx(y.at(i, c)).margin(1e-5));
+        CHECK(pdx[p].at(i - cut[p], c) == Approx(dx.at(i, c)).margin(1e-5));
+      }
+  for (std::int64_t c = 0; c < C; ++c) {
+    CHECK(pdg[0].at(0, c) + pdg[1].at(0, c) + pdg[2].at(0, c) == Approx(dg.at(0, c)).margin(1e-4));
+    CHECK(pdb[0].at(0, c) + pdb[1].at(0, c) + pdb[2].at(0, c) == Approx(db.at(0, c)).margin(1e-4));
+  }
+}
+
 }  // namespace
 
 TEST_CASE("share_of: contiguous shares in rank order cover the batch once, sizes differ by at most one") {
@@ -106,17 +124,38 @@ TEST_CASE("SyncBatchNorm: a batch split over 3 parts gives the whole batch's sta
       CHECK(prm[p].at(0, c) == Approx(rm.at(0, c)).margin(1e-6));
       CHECK(prv[p].at(0, c) == Approx(rv.at(0, c)).epsilon(1e-6));
     }
-    for (std::int64_t i = cut[p]; i < cut[p + 1]; ++i)
-      for (std::int64_t c = 0; c < C; ++c) {
-        CHECK(py[p].at(i - cut[p], c) == Approx(y.at(i, c)).margin(1e-5));
-        CHECK(pdx[p].at(i - cut[p], c) == Approx(dx.at(i, c)).margin(1e-5));
-      }
   }
-  // Parameter gradients: each part holds its rows' share; the shares add up.
-  for (std::int64_t c = 0; c < C; ++c) {
-    CHECK(pdg[0].at(0, c) + pdg[1].at(0, c) + pdg[2].at(0, c) == Approx(dg.at(0, c)).margin(1e-4));
-    CHECK(pdb[0].at(0, c) + pdb[1].at(0, c) + pdb[2].at(0, c) == Approx(db.at(0, c)).margin(1e-4));
-  }
+  check_parts_match_whole(cut, py, pdx, pdg, pdb, y, dx, dg, db);
+}
+
+TEST_CASE("SyncBatchNorm fused with LeakyReLU: a batch split over 3 parts gives the whole batch's outputs and "
+          "gradients") {
+  std::mt19937 rng(8);
+  const std::int64_t n = 301, C = 11;
+  const Tensor x = testutil::random_tensor(n, C, rng, -2.f, 3.f), dy = testutil::random_tensor(n, C, rng);
+  const Tensor gamma = testutil::random_tensor(1, C, rng, -1.5f, 1.5f), beta = testutil::random_tensor(1, C, rng);
+  const Activation f = Activation::leaky_relu;
+  auto fused = [&](const Tensor& xp, const Tensor& dyp, Tensor& y, Tensor& dx, Tensor& dg, Tensor& db,
+                   const SumAcross& across) {
+    const std::int64_t m = xp.rows();
+    Tensor sm = Tensor::empty(1, C), si = Tensor::empty(1, C), af = Tensor::empty(2, C);
+    y = Tensor::empty(m, C), dx = Tensor::zeros(m, C), dg = Tensor::zeros(1, C), db = Tensor::zeros(1, C);
+    cpu::batchnorm_act_train_forward(xp, gamma, beta, 1e-5f, 0.1f, f, 0.1f, y, sm, si, af, Tensor(), Tensor(), across);
+    cpu::batchnorm_act_train_backward(xp, gamma, beta, f, 0.1f, sm, si, af, dyp, dx, dg, db, across);
+  };
+  Tensor y, dx, dg, db;
+  fused(x, dy, y, dx, dg, db, {});
+  const std::int64_t cut[4] = {0, 100, 101, n};
+  ThreadSum ts(3);
+  std::vector<Tensor> py(3), pdx(3), pdg(3), pdb(3);
+  std::vector<std::thread> threads;
+  for (int p = 0; p < 3; ++p)
+    threads.emplace_back([&, p] {
+      fused(rows_of(x, cut[p], cut[p + 1]), rows_of(dy, cut[p], cut[p + 1]), py[p], pdx[p], pdg[p], pdb[p],
+            [&ts, p](double* v, std::size_t k) { ts.sum(p, v, k); });
+    });
+  for (auto& t : threads) t.join();
+  check_parts_match_whole(cut, py, pdx, pdg, pdb, y, dx, dg, db);
 }
 
 TEST_CASE("Dropout under a batch split: each part's mask is its rows of the whole batch's, the stream ends alike") {

@@ -611,6 +611,77 @@ TEST_CASE("batchnorm: bad arguments throw naming the argument", "[batchnorm][err
                       Contains("batchnorm_eval_backward: d_gamma"));
 }
 
+TEST_CASE("batchnorm_act: the fused kernels give batchnorm then the activation's values, every SIMD level",
+          "[batchnorm]") {
+  Rng rng(57);
+  const Shape shapes[] = {{2, 1}, {17, 33}, {600, 40}};
+  const float eps = 1e-5f, momentum = 0.1f, slope = 0.1f;
+  for (auto level : simd_levels())
+    for (const Shape& s : shapes)
+      for (Activation f : {Activation::identity, Activation::relu, Activation::leaky_relu})
+        for (int strided = 0; strided < 2; ++strided) {
+          INFO(level_name(level) << " shape " << s.r << "x" << s.c << " " << activation_name(f) << " strided "
+                                 << strided);
+          Simd simd(level);
+          Tensor x = random(rng, s.r, s.c, strided, -2.0f, 3.0f), dy = random(rng, s.r, s.c, !strided);
+          Tensor gamma = random(rng, 1, s.c, false, -1.5f, 1.5f), beta = random(rng, 1, s.c, false);
+          // Unfused: batchnorm_train_forward into u, the activation into y.
+          Tensor u = make(s.r, s.c, false), y_want = make(s.r, s.c, strided);
+          Tensor sm0 = make(1, s.c, false), si0 = make(1, s.c, false);
+          Tensor rm0 = random(rng, 1, s.c, false), rv0 = random(rng, 1, s.c, false, 0.5f, 2.0f);
+          Tensor rm1 = rm0.clone(), rv1 = rv0.clone();
+          cpu::batchnorm_train_forward(x, gamma, beta, eps, momentum, u, sm0, si0, rm0, rv0);
+          cpu::activation_forward(f, u, y_want, slope);
+          // Fused.
+          Tensor y = make(s.r, s.c, !strided), sm = make(1, s.c, false), si = make(1, s.c, false);
+          Tensor aff = make(2, s.c, strided);
+          cpu::batchnorm_act_train_forward(x, gamma, beta, eps, momentum, f, slope, y, sm, si, aff, rm1, rv1);
+          require_close(y, ref::to_mat(y_want), 1e-6, 1e-6, "y");
+          REQUIRE(bitwise_equal(sm, sm0));
+          REQUIRE(bitwise_equal(si, si0));
+          REQUIRE(bitwise_equal(rm1, rm0));
+          REQUIRE(bitwise_equal(rv1, rv0));
+          REQUIRE(pad_intact(y));
+          // The recomputation is the forward's values bit for bit.
+          Tensor y2 = make(s.r, s.c, strided);
+          cpu::batchnorm_act_apply(x, beta, f, slope, sm, aff, y2);
+          REQUIRE(bitwise_equal(y2, y));
+          // Backward: the activation's, then batchnorm's, accumulated onto existing values.
+          Tensor du = Tensor::zeros(s.r, s.c);
+          cpu::activation_backward(f, u, Tensor(), dy, du, slope);
+          Tensor dx_want = random(rng, s.r, s.c, false), dg_want = random(rng, 1, s.c, false),
+                 db_want = random(rng, 1, s.c, false);
+          Tensor dx = make(s.r, s.c, strided), dg = dg_want.clone(), db = db_want.clone();
+          dx.copy_from_(dx_want);
+          cpu::batchnorm_train_backward(x, gamma, sm0, si0, du, dx_want, dg_want, db_want);
+          cpu::batchnorm_act_train_backward(x, gamma, beta, f, slope, sm, si, aff, dy, dx, dg, db);
+          require_close(dx, ref::to_mat(dx_want), 1e-6, 1e-6, "d_x");
+          require_close(dg, ref::to_mat(dg_want), 1e-6, 1e-6, "d_gamma");
+          require_close(db, ref::to_mat(db_want), 1e-6, 1e-6, "d_beta");
+          REQUIRE(pad_intact(dx));
+          // Only some gradients wanted.
+          Tensor db2 = Tensor::zeros(1, s.c), db2_want = Tensor::zeros(1, s.c);
+          cpu::batchnorm_train_backward(x, gamma, sm0, si0, du, Tensor(), Tensor(), db2_want);
+          cpu::batchnorm_act_train_backward(x, gamma, beta, f, slope, sm, si, aff, dy, Tensor(), Tensor(), db2);
+          require_close(db2, ref::to_mat(db2_want), 1e-6, 1e-6, "d_beta alone");
+        }
+}
+
+TEST_CASE("batchnorm_act: an activation it does not fuse and bad shapes throw naming them", "[batchnorm][errors]") {
+  Tensor x = Tensor::zeros(10, 8), y = Tensor::zeros(10, 8), p = Tensor::zeros(1, 8), a = Tensor::zeros(2, 8);
+  REQUIRE_THROWS_WITH(
+      cpu::batchnorm_act_train_forward(x, p, p, 1e-5f, 0.1f, Activation::tanh, 0.f, y, p, p, a, p, p),
+      Contains("batchnorm_act_train_forward: activation 'tanh' is not fused"));
+  REQUIRE_THROWS_WITH(
+      cpu::batchnorm_act_train_forward(x, p, p, 1e-5f, 0.1f, Activation::relu, 0.f, y, p, p, p, p, p),
+      Contains("batchnorm_act_train_forward: save_affine: expected shape [2, 8], got [1, 8]"));
+  REQUIRE_THROWS_WITH(cpu::batchnorm_act_apply(x, p, Activation::relu, 0.f, p, a, Tensor::zeros(10, 7)),
+                      Contains("batchnorm_act_apply: y"));
+  REQUIRE_THROWS_WITH(cpu::batchnorm_act_train_backward(x, p, p, Activation::leaky_relu, 0.1f, p, p, a,
+                                                        Tensor::zeros(9, 8), y, p, p),
+                      Contains("batchnorm_act_train_backward: d_y"));
+}
+
 // ==== losses ==================================================================================
 
 TEST_CASE("mse: value and gradient", "[loss]") {

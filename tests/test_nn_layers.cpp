@@ -91,6 +91,62 @@ TEST_CASE("gradients of Linear, BatchNorm1d and DenseLayer match finite differen
   check_params("DenseLayer+Linear", reg, [&] { return lin.forward(l.forward(Var(x), true, drop)); });
 }
 
+TEST_CASE("a training MLP runs BatchNorm → LeakyReLU fused with the next Linear: the unfused layers' values and "
+          "gradients, a shorter tape") {
+  std::mt19937 r(4);
+  const Tensor x = gradcheck::random_tensor(300, 9, r, -2.f, 2.f);
+  const Tensor R = gradcheck::random_tensor(300, 5, r);
+  for (float dropout : {0.f, 0.3f}) {
+    INFO("dropout " << dropout);
+    Registry reg;
+    Rng init(5);
+    Mlp mlp(Scope{&reg, ""}, 9, {16, 12, 8}, 5, DenseLayerOptions{Activation::leaky_relu, 0.1f, true, dropout},
+            init);
+    // The same layers unfused, by hand: Linear → batch_norm → activation → [dropout].
+    BatchNormState st[3];
+    Rng d0(7), d1(7);
+    Var y = Var(x);
+    for (std::size_t k = 0; k < 3; ++k) {
+      const DenseLayer& l = mlp.layers[k];
+      st[k] = l.bn.state;
+      st[k].running_mean = l.bn.state.running_mean.clone(), st[k].running_var = l.bn.state.running_var.clone();
+      y = activation(Activation::leaky_relu, batch_norm(l.lin.forward(y), l.bn.gamma, l.bn.beta, st[k], true), 0.1f);
+      if (dropout > 0.f) y = Dropout{dropout}.forward(y, true, d0);
+    }
+    y = mlp.last.forward(y);
+    const std::size_t unfused_nodes = current_tape().size();
+    backward(sum(mul(y, Var(R))));
+    std::vector<Tensor> want;
+    for (auto& p : reg.params) want.push_back(p.var.grad().clone()), p.var.zero_grad();
+
+    const Var out = mlp.forward(Var(x), true, d1);
+    const std::size_t fused_nodes = current_tape().size();
+    // Without dropout: linear + 3 × batch_norm_act_linear instead of 3 × (linear, batch_norm, activation) + linear;
+    // with dropout: batch_norm_act in place of each (batch_norm, activation) pair.
+    CHECK(unfused_nodes == (dropout > 0.f ? 13 : 10));
+    CHECK(fused_nodes == (dropout > 0.f ? 10 : 4));
+    backward(sum(mul(out, Var(R))));
+    for (std::int64_t i = 0; i < y.rows(); ++i)
+      for (std::int64_t j = 0; j < y.cols(); ++j)
+        REQUIRE(out.value().at(i, j) == Approx(y.value().at(i, j)).margin(1e-5));
+    for (std::size_t k = 0; k < 3; ++k)
+      for (std::int64_t c = 0; c < mlp.layers[k].out(); ++c) {
+        CHECK(mlp.layers[k].bn.state.running_mean.at(0, c) == st[k].running_mean.at(0, c));
+        CHECK(mlp.layers[k].bn.state.running_var.at(0, c) == st[k].running_var.at(0, c));
+      }
+    for (std::size_t p = 0; p < reg.params.size(); ++p) {
+      INFO(reg.params[p].name);
+      const Tensor g = reg.params[p].var.grad();
+      REQUIRE(g.defined());
+      for (std::int64_t i = 0; i < g.rows(); ++i)
+        for (std::int64_t j = 0; j < g.cols(); ++j)
+          REQUIRE(g.at(i, j) == Approx(want[p].at(i, j)).margin(1e-4 * (1.0 + std::abs(want[p].at(i, j)))));
+    }
+    // Eval (and folded) forward is the unfused path, unchanged.
+    CHECK(!mlp.layers[0].fuses_with_next(false));
+  }
+}
+
 TEST_CASE("gradients of the GAT block and a dense module (2 blocks) match finite differences") {
   auto g = share(fixtures::grid_graph(6, 5));
   std::mt19937 r(4);

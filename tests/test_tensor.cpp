@@ -1,7 +1,9 @@
 // The Tensor type itself: allocation and alignment, views, deep copies,
 // version counting, finiteness and shape checks.
 #include <catch2/catch.hpp>
+#include <sys/resource.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -43,6 +45,37 @@ TEST_CASE("tensor: factories, shape, 64-byte alignment", "[tensor]") {
   REQUIRE(u.data() == nullptr);
   REQUIRE(u.version() == 0);
   REQUIRE(u.numel() == 0);
+}
+
+namespace {
+long max_rss_mib() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024;  // KiB on Linux
+}
+}  // namespace
+
+TEST_CASE("tensor: the CPU block cache reuses freed blocks and never grows the process past its high-water mark",
+          "[tensor][memory]") {
+  // Blocks of one size, freed, then as many of another size: a cache that kept
+  // the first ones besides the second would hold both (96 + 112 MiB).
+  const long before = max_rss_mib();
+  auto touch = [](const Tensor& t) { t.fill_(1.0f); };
+  {
+    std::vector<Tensor> a;
+    for (int k = 0; k < 24; ++k) touch(a.emplace_back(Tensor::empty(1024, 1024)));  // 4 MiB each
+  }
+  std::vector<const void*> freed;
+  {
+    std::vector<Tensor> b;
+    for (int k = 0; k < 28; ++k) touch(b.emplace_back(Tensor::empty(1024, 1040)));  // 4 MiB + 64 KiB
+    for (const Tensor& t : b) freed.push_back(t.data());
+  }
+  // A freed block comes back for the same size (a hit, no fresh pages).
+  CHECK(std::count(freed.begin(), freed.end(), Tensor::empty(1024, 1040).data()) == 1);
+  const long grown = max_rss_mib() - before;
+  INFO("peak grew by " << grown << " MiB");
+  CHECK(grown < 150);
 }
 
 TEST_CASE("tensor: construction errors", "[tensor][errors]") {

@@ -330,6 +330,39 @@ TEST_CASE("vulkan: batchnorm train / eval forward and backward", "[vulkan]") {
   large_paths.require();
 }
 
+TEST_CASE("vulkan: batchnorm fused with an activation (the Backend's composition of the unfused kernels)",
+          "[vulkan]") {
+  if (!vkt::ready()) return;
+  std::mt19937 rng(16);
+  const std::int64_t n = 300, c = 7;
+  Tensor x = rnd(n, c, rng, -2.f, 3.f), gamma = rnd(1, c, rng, -1.5f, 1.5f), beta = rnd(1, c, rng);
+  Tensor rm = rnd(1, c, rng), rv = rnd(1, c, rng, .5f, 2.f), dy = rnd(n, c, rng), dx0 = rnd(n, c, rng);
+  for (Activation f : {Activation::leaky_relu, Activation::relu}) {
+    INFO(activation_name(f));
+    Tensor yc = Tensor::empty(n, c), smc = Tensor::empty(1, c), sic = Tensor::empty(1, c), afc = Tensor::empty(2, c);
+    Tensor rmc = rm.clone(), rvc = rv.clone();
+    Tensor yg = gpu().empty(n, c, DType::f32), smg = gpu().empty(1, c, DType::f32), sig = gpu().empty(1, c, DType::f32);
+    Tensor afg = gpu().empty(2, c, DType::f32), rmg = V(rm), rvg = V(rv);
+    cpu().batchnorm_act_train_forward(x, gamma, beta, 1e-5f, 0.1f, f, 0.1f, yc, smc, sic, afc, rmc, rvc, {});
+    gpu().batchnorm_act_train_forward(V(x), V(gamma), V(beta), 1e-5f, 0.1f, f, 0.1f, yg, smg, sig, afg, rmg, rvg, {});
+    require_close(yc, yg, 1e-4f, 1e-4f, "y");
+    require_close(smc, smg, 1e-4f, 1e-5f, "save_mean");
+    require_close(sic, sig, 1e-4f, 1e-5f, "save_invstd");
+    require_close(rmc, rmg, 1e-4f, 1e-5f, "running_mean");
+    require_close(rvc, rvg, 1e-4f, 1e-5f, "running_var");
+    Tensor yg2 = gpu().empty(n, c, DType::f32);
+    gpu().batchnorm_act_apply(V(x), V(gamma), V(beta), 1e-5f, f, 0.1f, smg, afg, yg2);
+    require_close(yc, yg2, 1e-4f, 1e-4f, "apply y");
+    Tensor dxc = dx0.clone(), dgc = gamma.clone(), dbc = beta.clone(), dxg = V(dx0), dgg = V(gamma), dbg = V(beta);
+    cpu().batchnorm_act_train_backward(x, gamma, beta, 1e-5f, f, 0.1f, smc, sic, afc, dy, dxc, dgc, dbc, {});
+    gpu().batchnorm_act_train_backward(V(x), V(gamma), V(beta), 1e-5f, f, 0.1f, smg, sig, afg, V(dy), dxg, dgg, dbg,
+                                       {});
+    require_close(dxc, dxg, 1e-4f, 1e-4f, "d_x");
+    require_close(dgc, dgg, 1e-4f, 1e-4f, "d_gamma");
+    require_close(dbc, dbg, 1e-4f, 1e-4f, "d_beta");
+  }
+}
+
 TEST_CASE("vulkan: pooling (segment max, broadcast, neighbour mean)", "[vulkan]") {
   if (!vkt::ready()) return;
   const vkt::LargePaths large_paths;

@@ -77,6 +77,27 @@ class Backend {
                                                const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
                                                const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across);
 
+  // BatchNorm (training) fused with the activation after it (identity, relu,
+  // leaky_relu; kernels/batchnorm.hpp batchnorm_act_*): backward recomputes
+  // the normalised value and the activation's sign from x and the saved
+  // statistics instead of keeping them. save_mean / save_invstd [1, C] are
+  // batchnorm_train_forward's; save_affine [2, C] is the backend's own. apply
+  // recomputes y (the forward's values). The defaults compose the unfused
+  // kernels (the same values, more passes and temporaries) for backends
+  // without fused kernels.
+  virtual void batchnorm_act_train_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
+                                           float momentum, Activation f, float slope, const Tensor& y,
+                                           const Tensor& save_mean, const Tensor& save_invstd,
+                                           const Tensor& save_affine, const Tensor& running_mean,
+                                           const Tensor& running_var, const SumAcross& across);
+  virtual void batchnorm_act_apply(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps, Activation f,
+                                   float slope, const Tensor& save_mean, const Tensor& save_affine, const Tensor& y);
+  virtual void batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
+                                            Activation f, float slope, const Tensor& save_mean,
+                                            const Tensor& save_invstd, const Tensor& save_affine, const Tensor& d_y,
+                                            const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta,
+                                            const SumAcross& across);
+
   // Reductions and losses into [1, 1] tensors; backward takes d_out as [1, 1].
   virtual void sum_all(const Tensor& x, const Tensor& out) = 0;
   virtual void add_scalar_accumulate(const Tensor& s, float scale, const Tensor& d_x) = 0;  // d_x += scale*s[0,0]

@@ -55,6 +55,20 @@ struct BatchNormState {
 // Batch statistics (and running-stat update) when training, running stats otherwise.
 Var batch_norm(const Var& x, const Var& gamma, const Var& beta, BatchNormState& state, bool training,
                const Var& into = {});
+// BatchNorm with batch statistics (training) fused with the activation f
+// after it (identity, relu or leaky_relu): the values of
+// activation(f, batch_norm(x, ..., true), slope), with one saved tensor (x)
+// instead of three: backward recomputes the normalised value and the
+// activation's sign from x and the batch statistics. Updates the running
+// statistics like batch_norm; SyncBatchNorm under a batch split, likewise.
+Var batch_norm_act(const Var& x, const Var& gamma, const Var& beta, BatchNormState& state, Activation f, float slope,
+                   const Var& into = {});
+// linear(batch_norm_act(x, ...), W, b) without keeping the activation: its
+// backward recomputes it from x for W's gradient. A chain of Linear →
+// BatchNorm → activation layers built from these keeps one [n, width]
+// tensor per layer (the Linear's output) for backward.
+Var batch_norm_act_linear(const Var& x, const Var& gamma, const Var& beta, BatchNormState& state, Activation f,
+                          float slope, const Var& W, const Var& b);
 
 // ---- graph attention ------------------------------------------------------------
 // el/er halves of additive attention: z [n, H*F], a_l/a_r [H, F] -> ([n,H], [n,H]).

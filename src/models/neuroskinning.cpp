@@ -123,7 +123,7 @@ class NeuroSkinning final : public Model {
     Var per_character = linear(glob, first.W.rows_slice(w, first.in), first.b);
     Var z = linear_segment_bias(g, y, first.W.rows_slice(0, w), per_character);
     if (!hidden) return z;
-    return classifier_.forward(classifier_.layers[0].after_linear(z, training, rng_), training, rng_, 1);
+    return classifier_.forward_after_linear(z, training, rng_, 0);
   }
 
   // Per slot i: out(leaky(... leaky(context + pair_i W_p) ...)) -> [n, 1];

@@ -2,6 +2,53 @@
 #include "src/ops/op_util.hpp"
 
 namespace gatcore {
+namespace ops_detail {
+
+void linear_product(Backend& be, Precision p, const Tensor& x, const Tensor& W, const Tensor& y) {
+  product(be, p, x, false, W, false, y, 1.0f, 0.0f);
+}
+void linear_input_grad(Backend& be, Precision p, const Tensor& dy, const Tensor& W, const Tensor& dx, float beta) {
+  product(be, p, dy, false, W, true, dx, 1.0f, beta);
+}
+void linear_weight_grad(Backend& be, Precision p, const Tensor& x, const Tensor& dy, const Tensor& dW, float beta) {
+  product(be, p, x, true, dy, false, dW, 1.0f, beta);
+}
+
+BatchNormSetup batch_norm_setup(const char* op, const Var& x, const Var& gamma, const Var& beta, BatchNormState& st,
+                                bool training) {
+  check_var(op, "x", x);
+  check_var(op, "gamma", gamma);
+  check_var(op, "beta", beta);
+  const std::int64_t C = x.cols();
+  GATCORE_CHECK(gamma.rows() == 1 && gamma.cols() == C && beta.rows() == 1 && beta.cols() == C, op,
+                ": gamma ", gamma.value().shape_str(), " and beta ", beta.value().shape_str(), " must be [1, ", C,
+                "]");
+  BatchNormSetup s;
+  s.be = &backend_of(op, {&x, &gamma, &beta});
+  if (!st.running_mean.defined()) {
+    st.running_mean = s.be->zeros(1, C);
+    st.running_var = s.be->empty(1, C);
+    s.be->fill(st.running_var, 1.0f);
+  }
+  GATCORE_CHECK(st.running_mean.cols() == C && st.running_var.cols() == C, op, ": running statistics have ",
+                st.running_mean.cols(), " columns, x has ", C);
+  // A batch split over processes (batch_split.hpp): SyncBatchNorm, the
+  // statistics summed over the processes (a placeholder share adds zeros).
+  const BatchSplit* split = training ? current_batch_split() : nullptr;
+  if (split) {
+    s.placeholder = split->placeholder();
+    s.across = [sum = split->sum, placeholder = s.placeholder](double* v, std::size_t n) {
+      if (placeholder) std::fill(v, v + n, 0.0);
+      sum(v, n);
+    };
+  }
+  if (training && !split)
+    GATCORE_CHECK(x.rows() > 1, op, ": training needs more than one row to estimate a variance");
+  return s;
+}
+
+}  // namespace ops_detail
+
 using namespace ops_detail;
 
 Var matmul(const Var& a, const Var& b, const Var& into) {
@@ -21,19 +68,17 @@ Var linear(const Var& x, const Var& W, const Var& b, const Var& into) {
   const bool grad = needs_grad({&x, &W, &b});
   Var y = make_output(op, be, x.rows(), W.cols(), into, grad);
   const Precision prec = product_precision(be, x.cols());
-  product(be, prec, x.value(), false, W.value(), false, y.value(), 1.0f, 0.0f);
+  linear_product(be, prec, x.value(), W.value(), y.value());
   if (b.defined()) be.add_row_bias(b.value(), y.value());
   if (grad) {
     current_tape().record(op, [&be, prec, xi = impl_if(x), Wi = impl_if(W), bi = impl_if(b), yi = y.impl(),
                                xs = SavedTensor(x.value(), "x"), Ws = SavedTensor(W.value(), "W")] {
       Tensor dy = yi->grad_if_any();
       if (!dy.defined()) return;
-      accumulate_grad(be, xi, [&](const Tensor& dx, float beta) {
-        product(be, prec, dy, false, Ws.get(op), true, dx, 1.0f, beta);
-      });
-      accumulate_grad(be, Wi, [&](const Tensor& dW, float beta) {
-        product(be, prec, xs.get(op), true, dy, false, dW, 1.0f, beta);
-      });
+      accumulate_grad(be, xi,
+                      [&](const Tensor& dx, float beta) { linear_input_grad(be, prec, dy, Ws.get(op), dx, beta); });
+      accumulate_grad(be, Wi,
+                      [&](const Tensor& dW, float beta) { linear_weight_grad(be, prec, xs.get(op), dy, dW, beta); });
       if (bi && bi->requires_grad) be.column_sums_accumulate(dy, bi->grad_or_zeros());
     });
   }
@@ -189,45 +234,23 @@ Var row_softmax(const Var& x, const Tensor& mask) {
 Var batch_norm(const Var& x, const Var& gamma, const Var& beta, BatchNormState& st, bool training,
                const Var& into) {
   static const char* op = "batch_norm";
-  check_var(op, "x", x);
-  check_var(op, "gamma", gamma);
-  check_var(op, "beta", beta);
+  const BatchNormSetup setup = batch_norm_setup(op, x, gamma, beta, st, training);
+  Backend& be = *setup.be;
+  const SumAcross& across = setup.across;
   const std::int64_t C = x.cols();
-  GATCORE_CHECK(gamma.rows() == 1 && gamma.cols() == C && beta.rows() == 1 && beta.cols() == C, op,
-                ": gamma ", gamma.value().shape_str(), " and beta ", beta.value().shape_str(), " must be [1, ", C,
-                "]");
-  Backend& be = backend_of(op, {&x, &gamma, &beta});
-  if (!st.running_mean.defined()) {
-    st.running_mean = be.zeros(1, C);
-    st.running_var = be.empty(1, C);
-    be.fill(st.running_var, 1.0f);
-  }
-  GATCORE_CHECK(st.running_mean.cols() == C && st.running_var.cols() == C, op, ": running statistics have ",
-                st.running_mean.cols(), " columns, x has ", C);
-  // A batch split over processes (batch_split.hpp): SyncBatchNorm, the
-  // statistics summed over the processes (a placeholder share adds zeros).
-  const BatchSplit* split = training ? current_batch_split() : nullptr;
-  SumAcross across;
-  if (split)
-    across = [sum = split->sum, placeholder = split->placeholder()](double* v, std::size_t n) {
-      if (placeholder) std::fill(v, v + n, 0.0);
-      sum(v, n);
-    };
-  if (training && !split)
-    GATCORE_CHECK(x.rows() > 1, op, ": training needs more than one row to estimate a variance");
   const bool grad = needs_grad({&x, &gamma, &beta});
   Var y = make_output(op, be, x.rows(), C, into, grad);
   const float eps = st.eps;
   if (training) {
     Tensor mean = be.empty(1, C), invstd = be.empty(1, C);
-    if (split)
+    if (across)
       be.batchnorm_train_forward_across(x.value(), gamma.value(), beta.value(), eps, st.momentum, y.value(), mean,
                                         invstd, st.running_mean, st.running_var, across);
     else
       be.batchnorm_train_forward(x.value(), gamma.value(), beta.value(), eps, st.momentum, y.value(), mean, invstd,
                                  st.running_mean, st.running_var);
     if (grad)
-      current_tape().record(op, [&be, across, placeholder = split && split->placeholder(), xi = x.impl(),
+      current_tape().record(op, [&be, across, placeholder = setup.placeholder, xi = x.impl(),
                                  gi = gamma.impl(), bi = beta.impl(), yi = y.impl(),
                                  xs = SavedTensor(x.value(), "x"), gs = SavedTensor(gamma.value(), "gamma"), mean,
                                  invstd] {

@@ -75,4 +75,24 @@ void overwrite_grad_into(Backend& be, const ImplPtr& p, F&& kernel) {
   }
 }
 
+// linear's products (ops/dense_ops.cpp), shared by every op that applies a
+// Linear layer's weight, so that how a layer's product is computed is decided
+// in one place: y = x·W, dx = dy·Wᵀ + beta·dx, dW = xᵀ·dy + beta·dW.
+// `p`: the precision the op took at forward time (product_precision).
+void linear_product(Backend& be, Precision p, const Tensor& x, const Tensor& W, const Tensor& y);
+void linear_input_grad(Backend& be, Precision p, const Tensor& dy, const Tensor& W, const Tensor& dx, float beta);
+void linear_weight_grad(Backend& be, Precision p, const Tensor& x, const Tensor& dy, const Tensor& dW, float beta);
+
+// batch_norm's argument checks and running statistics (created on first
+// use), shared with the fused BatchNorm ops; when training under a batch
+// split over processes (batch_split.hpp), the sum of its statistics
+// (SyncBatchNorm; a placeholder share adds zeros).
+struct BatchNormSetup {
+  Backend* be = nullptr;
+  SumAcross across;          // set under a batch split
+  bool placeholder = false;  // this process's rows are not in the batch
+};
+BatchNormSetup batch_norm_setup(const char* op, const Var& x, const Var& gamma, const Var& beta, BatchNormState& st,
+                                bool training);
+
 }  // namespace gatcore::ops_detail
