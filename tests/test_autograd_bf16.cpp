@@ -3,7 +3,8 @@
 // values, within the bound of the operands' rounding; the precision recorded
 // at forward time and used by backward; fp32 where the backend has no bf16
 // products (GATCORE_SIMD below AVX-512, a CPU without AVX512_BF16) and for
-// products over fewer than 16 terms; 1 vs 2 threads bitwise.
+// products over fewer than 16 terms; 1 vs 2 threads bitwise; the fused
+// batch_norm_act_linear's Linear the same way.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -155,5 +156,40 @@ TEST_CASE("bf16 products: fp32 without AVX512_BF16 and for products over fewer t
     std::string why = "x";
     CHECK(models::training_precision(Precision::bf16, Device::cpu, &why) == Precision::bf16);
     CHECK(why.empty());
+  }
+}
+
+TEST_CASE("bf16 products: batch_norm_act_linear's Linear follows the scope, recorded at forward", "[autograd][bf16]") {
+  std::mt19937 rng(12);
+  const Tensor x0 = random_tensor(150, 40, rng), g0 = random_tensor(1, 40, rng), b0 = random_tensor(1, 40, rng),
+               W0 = random_tensor(40, 24, rng), lb0 = random_tensor(1, 24, rng), R = random_tensor(150, 24, rng);
+  auto run = [&](Precision fwd, Precision bwd) {
+    Var x(x0.clone(), true), gamma(g0.clone(), true), beta(b0.clone(), true), W(W0.clone(), true),
+        lb(lb0.clone(), true);
+    BatchNormState st;
+    Var y, loss;
+    {
+      ProductPrecisionScope scope(fwd);
+      y = batch_norm_act_linear(x, gamma, beta, st, Activation::leaky_relu, 0.01f, W, lb);
+      loss = sum(mul(y, Var(R)));
+    }
+    {
+      ProductPrecisionScope scope(bwd);
+      backward(loss);
+    }
+    return std::vector<Tensor>{y.value(), x.grad(), gamma.grad(), W.grad(), lb.grad()};
+  };
+  const auto b16 = run(Precision::bf16, Precision::bf16), b16_f32 = run(Precision::bf16, Precision::fp32);
+  const auto f32 = run(Precision::fp32, Precision::fp32), f32_b16 = run(Precision::fp32, Precision::bf16);
+  for (std::size_t i = 0; i < b16.size(); ++i) {
+    INFO("output " << i);
+    REQUIRE(testutil::bitwise_equal(b16_f32[i], b16[i]));
+    REQUIRE(testutil::bitwise_equal(f32_b16[i], f32[i]));
+  }
+  if (bf16_supported()) {
+    CHECK_FALSE(testutil::bitwise_equal(b16[0], f32[0]));  // the product did run in bf16
+    CHECK_FALSE(testutil::bitwise_equal(b16[3], f32[3]));  // and its weight gradient
+  } else {
+    for (std::size_t i = 0; i < b16.size(); ++i) REQUIRE(testutil::bitwise_equal(b16[i], f32[i]));
   }
 }
