@@ -207,11 +207,13 @@ int run_train(TrainArgs a) {
       if (md.count("sample_vertices")) sample_vertices = std::stol(md.at("sample_vertices"));
       if (md.count("sampling")) a.sampling = md.at("sampling");
     }
-    if (a.precision.empty() && md.count("precision_requested")) {
-      a.precision = md.at("precision_requested");
-    } else if (a.precision.empty() && md.count("precision")) {
-      a.precision = md.at("precision");
-    }
+    // A resumed run keeps the precision asked for (a bad value in the file
+    // is refused here, naming the checkpoint and the key).
+    for (const char* key : {"precision_requested", "precision"})
+      if (a.precision.empty() && md.count(key)) {
+        parse_precision(md.at(key), (a.resume + ": metadata " + key).c_str());
+        a.precision = md.at(key);
+      }
     if (md.count("data_path")) {
       if (data.empty()) data = md.at("data_path");
     } else if (!data.empty()) {
