@@ -511,21 +511,29 @@ def main():
     names = set(subprocess.run([args.gatbench, "--benchmark_list_tests"], check=True, capture_output=True,
                                text=True, env=env).stdout.split())
     rows = []
+
+    def torch_times(name, vs):
+        """Each variant's median ms (NaN where it failed) and the fastest variant (None if all failed)."""
+        py = {}
+        for v in vs:
+            r = run_child(name, "time", args, v)
+            py[v] = r["ms"] if r else nan
+        ok = {v: t for v, t in py.items() if t == t}
+        return py, (min(ok, key=ok.get) if ok else None)
+
+    def add_row(label, py, best, gc):
+        rows.append({"workload": label, "pytorch_ms": py, "best_variant": best,
+                     "best_pytorch_ms": py[best] if best else nan, "gatcore_ms": gc,
+                     "speedup": (py[best] / gc) if best else nan, "load1": load1()})
+        print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
+
     for name, bname, label in work:
         # gatcore, then each PyTorch variant, back to back per workload: on a
         # shared machine the load drifts, and adjacent runs see about the same load.
         gatbench_time(bname)
         gc = gatcore_ms(bname)
-        py = {}
-        for v in variants:
-            r = run_child(name, "time", args, v)
-            py[v] = r["ms"] if r else nan
-        ok = {v: t for v, t in py.items() if t == t}
-        best = min(ok, key=ok.get) if ok else None
-        rows.append({"workload": label, "pytorch_ms": py, "best_variant": best,
-                     "best_pytorch_ms": ok[best] if best else nan, "gatcore_ms": gc,
-                     "speedup": (ok[best] / gc) if best else nan, "load1": load1()})
-        print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
+        py, best = torch_times(name, variants)
+        add_row(label, py, best, gc)
         for xname, xlabel, xvariants in EXTRA.get(name, []):
             if xname not in names and xname.split("/real_time")[0] not in names:
                 continue  # gatbench has no such benchmark (e.g. a bf16 one on a CPU without AVX512_BF16)
@@ -533,19 +541,11 @@ def main():
             gx = gatcore_ms(xname)
             xpy, xbest = py, best
             if xvariants:  # torch's own bf16 (autocast) runs, for a like-for-like row
-                xpy = {}
-                for v in xvariants:
-                    r = run_child(name, "time", args, v)
-                    xpy[v] = r["ms"] if r else nan
-                ok = {v: t for v, t in xpy.items() if t == t}
-                xbest = min(ok, key=ok.get) if ok else None
+                xpy, xbest = torch_times(name, xvariants)
                 if xbest is None:  # torch's autocast failed on this model: the fp32 runs are the reference
                     xlabel += " vs torch fp32 (autocast failed)"
                     xpy, xbest = py, best
-            rows.append({"workload": xlabel, "pytorch_ms": xpy, "best_variant": xbest,
-                         "best_pytorch_ms": xpy[xbest] if xbest else nan, "gatcore_ms": gx,
-                         "speedup": (xpy[xbest] / gx) if xbest else nan, "load1": load1()})
-            print(f"[progress] {json.dumps(rows[-1])}", file=sys.stderr, flush=True)
+            add_row(xlabel, xpy, xbest, gx)
     mem = []
     for name, bname in ([] if args.skip_memory else peaks):
         b = bench.get(bname, {})
