@@ -87,6 +87,41 @@ TEST_CASE("ReduceLROnPlateau with validation every few epochs compares validatio
   CHECK(t.plateau().best == float(v.val_loss));
 }
 
+TEST_CASE("cosine schedule: the rate falls from lr0 to the floor over the run; the Trainer leaves it alone") {
+  CHECK(cosine_lr(1e-3f, 1e-5f, 0.0) == Approx(1e-3f));
+  CHECK(cosine_lr(1e-3f, 1e-5f, 0.5) == Approx(0.5 * (1e-3 + 1e-5)));
+  CHECK(cosine_lr(1e-3f, 1e-5f, 1.0) == Approx(1e-5f));
+  CHECK(cosine_lr(1e-3f, 1e-5f, 7.0) == Approx(1e-5f));   // past the budget: the floor, not a rise
+  CHECK(cosine_lr(1e-3f, 1e-5f, -1.0) == Approx(1e-3f));
+  float prev = 1.f;
+  for (int k = 0; k <= 20; ++k) {
+    const float lr = cosine_lr(1e-3f, 0.f, k / 20.0);
+    CHECK(lr <= prev);
+    prev = lr;
+  }
+  CHECK(schedule_from_name("cosine") == Schedule::cosine);
+  CHECK(std::string(schedule_name(Schedule::step)) == "step");
+  CHECK_THROWS_WITH(schedule_from_name("linear", "ckpt.gcm: metadata lr_schedule"),
+                    Catch::Contains("ckpt.gcm: metadata lr_schedule") && Catch::Contains("'linear'"));
+
+  ModelConfig c = ModelConfig::defaults("densegats", 9, 3);
+  c.modules = 1;
+  c.blocks = 1;
+  std::vector<Sample> train = {fixtures::wave_sample(8, 6, 0.f, false), fixtures::wave_sample(8, 6, 0.5f, false)};
+  auto m = make_model(c, 3);
+  TrainOptions o = TrainOptions::defaults_for(c);
+  o.sample_vertices = 25;
+  o.batch_size = 2;
+  o.schedule = Schedule::cosine;
+  o.plateau_patience = 0;  // would lower the rate every epoch under the plateau rule
+  Trainer t(*m, o, Normaliser::fit(train, true));
+  t.optimiser().set_lr(3e-4f);
+  for (int e = 0; e < 3; ++e) {
+    const EpochStats st = t.run_epoch(train, train);
+    CHECK(st.lr == 3e-4f);
+  }
+}
+
 TEST_CASE("batches: induced subgraphs stacked block-diagonally with per-character neighbour graphs") {
   Sample a = fixtures::wave_sample(6, 5, 0.f, true), b = fixtures::wave_sample(5, 4, 1.f, true);
   a.bone_mask = Tensor::from(1, 5, {1, 1, 1, 0, 1});

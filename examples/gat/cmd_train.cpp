@@ -48,7 +48,8 @@ void on_sigint(int) {
 
 struct TrainArgs {
   std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss, joint_columns, keep_best,
-              sampling, precision;
+              sampling, precision, lr_schedule;
+  bool lr_set = false;  // --lr given (a resumed run otherwise continues at the checkpoint's rate)
   long epochs = 10, seed = 0, batch = 0, samples = 64;
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
@@ -107,7 +108,16 @@ gat::Runner gat::setup_train(CLI::App& gat) {
   add_seed(c, a->seed, "initialisation, sampling and data seed");
   add_threads(c, a->common);
   c.add_option("--batch", a->batch, "characters per batch (default: paper, 8 or 12)")->check(int_in(1, 4096));
-  c.add_option("--lr", a->lr, "initial learning rate")->check(positive_number())->capture_default_str();
+  c.add_option("--lr", a->lr,
+               "initial learning rate (on --resume: replaces the checkpoint's current rate; without it the run "
+               "continues at that rate)")
+      ->check(positive_number())->capture_default_str();
+  c.add_option("--lr-schedule", a->lr_schedule,
+               "plateau (the DenseGATs family's default: x0.75 after 8 validations without improvement), step "
+               "(NeuroSkinning's default: x0.99 every 200 epochs) or cosine (from the initial rate down to 5e-7 "
+               "over this run's --minutes, else over its epochs: a time-budgeted run ends annealed); default of "
+               "a resumed run: the checkpoint's")
+      ->check(CLI::IsMember({"plateau", "step", "cosine"}));
   c.add_option("--minutes", a->minutes,
                "time budget: no new epoch starts once M minutes of training have passed (the epoch running then "
                "finishes; --epochs still caps it)")
@@ -152,6 +162,7 @@ gat::Runner gat::setup_train(CLI::App& gat) {
   return [a, &c] {
     TrainArgs args = *a;
     if (!c.count("--samples")) args.samples = -1;  // not given: the source's default
+    args.lr_set = c.count("--lr") > 0;
     return run_train(std::move(args));
   };
 }
@@ -214,6 +225,10 @@ int run_train(TrainArgs a) {
         parse_precision(md.at(key), (a.resume + ": metadata " + key).c_str());
         a.precision = md.at(key);
       }
+    if (a.lr_schedule.empty() && md.count("lr_schedule")) {
+      schedule_from_name(md.at("lr_schedule"), (a.resume + ": metadata lr_schedule").c_str());
+      a.lr_schedule = md.at("lr_schedule");
+    }
     if (md.count("data_path")) {
       if (data.empty()) data = md.at("data_path");
     } else if (!data.empty()) {
@@ -352,6 +367,7 @@ int run_train(TrainArgs a) {
   if (!a.sampling.empty())
     opt.sampling = sampling_from_name(a.sampling);
   if (!a.precision.empty()) opt.precision = parse_precision(a.precision, "--precision");
+  if (!a.lr_schedule.empty()) opt.schedule = schedule_from_name(a.lr_schedule);
   // Parameters are drawn (or loaded) on the CPU and moved before the
   // optimiser allocates its moments next to them.
   model->to(dev);
@@ -360,7 +376,18 @@ int run_train(TrainArgs a) {
   dist::Communicator& comm = dist::world();
   const bool root = comm.rank() == 0;
   Trainer trainer(*model, opt, norm, comm);
-  if (!resume.empty()) restore_training_state(loaded.file, trainer, resume);
+  if (!resume.empty()) {
+    restore_training_state(loaded.file, trainer, resume);
+    if (a.lr_set) {
+      if (root)
+        std::printf("learning rate %g from --lr (the checkpoint was at %g)\n", double(lr),
+                    double(trainer.optimiser().lr()));
+      trainer.optimiser().set_lr(lr);
+    }
+  }
+  // cosine: this run anneals from the rate it starts at (--lr, or a resumed
+  // checkpoint's) to min_lr over its own budget.
+  const float lr_start = trainer.optimiser().lr();
   // bf16 where the backend cannot: fp32, said once (the Trainer already runs fp32).
   std::string precision_why;
   training_precision(opt.precision, dev, &precision_why);
@@ -384,7 +411,8 @@ int run_train(TrainArgs a) {
                                            {"batch", std::to_string(opt.batch_size)},
                                            {"sample_vertices", std::to_string(opt.sample_vertices)},
                                            {"sampling", sampling_name(opt.sampling)},
-                                           {"precision", precision_name(trainer.options().precision)}};
+                                           {"precision", precision_name(trainer.options().precision)},
+                                           {"lr_schedule", schedule_name(opt.schedule)}};
   if (trainer.options().precision != opt.precision) extra["precision_requested"] = precision_name(opt.precision);
   // The node features a character command (predict-weights, deform) must
   // compute for this model (character_model.hpp).
@@ -477,6 +505,15 @@ int run_train(TrainArgs a) {
                    gat::hms(eta).c_str());
       std::fflush(stderr);
     };
+    if (opt.schedule == Schedule::cosine) {
+      // Progress through this run's budget, rank 0's clock: every rank must
+      // step with the same rate.
+      double p = minutes > 0 ? std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() /
+                                   (minutes * 60.0)
+                             : double(trainer.epoch() - first) / double(std::max<long>(1, epochs - first));
+      comm.broadcast(&p, sizeof p, 0);
+      trainer.optimiser().set_lr(cosine_lr(lr_start, opt.min_lr, p));
+    }
     const bool last = trainer.epoch() + 1 >= epochs;
     const bool validate = last || (trainer.epoch() + 1) % val_every == 0;
     const EpochStats st = trainer.run_epoch(train, validate ? val : std::vector<Sample>{}, progress);

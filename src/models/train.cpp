@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <numbers>
 #include <numeric>
 
 namespace gatcore::models {
@@ -32,6 +33,26 @@ TrainOptions TrainOptions::defaults_for(const ModelConfig& cfg) {
     o.schedule = Schedule::step;
   }
   return o;
+}
+
+const char* schedule_name(Schedule s) {
+  switch (s) {
+    case Schedule::plateau: return "plateau";
+    case Schedule::step: return "step";
+    case Schedule::cosine: return "cosine";
+  }
+  return "plateau";
+}
+
+Schedule schedule_from_name(const std::string& name, const char* what) {
+  for (Schedule s : {Schedule::plateau, Schedule::step, Schedule::cosine})
+    if (name == schedule_name(s)) return s;
+  throw InvalidArgument(std::string(what) + ": unknown learning-rate schedule '" + name + "' (plateau, step, cosine)");
+}
+
+float cosine_lr(float lr0, float lr_min, double progress) {
+  const double p = std::clamp(progress, 0.0, 1.0);
+  return float(double(lr_min) + (double(lr0) - double(lr_min)) * 0.5 * (1.0 + std::cos(std::numbers::pi * p)));
 }
 
 float PlateauScheduler::step(float metric, float lr) {
@@ -337,7 +358,7 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
       plateau_.bad_epochs = 0;
     }
     if (st.val_loss >= 0 || !plateau_.on_validation) adam_.set_lr(plateau_.step(metric, adam_.lr()));
-  } else if (opt_.step_every > 0 && epoch_ % opt_.step_every == 0) {
+  } else if (opt_.schedule == Schedule::step && opt_.step_every > 0 && epoch_ % opt_.step_every == 0) {
     adam_.set_lr(std::max(opt_.min_lr, adam_.lr() * opt_.step_gamma));
   }
   st.lr = adam_.lr();

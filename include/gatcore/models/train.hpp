@@ -31,7 +31,20 @@ enum class Sampling {
 const char* sampling_name(Sampling s);
 // Throws InvalidArgument naming `name` for anything else.
 Sampling sampling_from_name(const std::string& name);
-enum class Schedule { plateau, step };
+// plateau: ReduceLROnPlateau (DenseGATs' paper); step: x step_gamma every
+// step_every epochs (NeuroSkinning's); cosine: the caller sets the rate before
+// each epoch from the run's progress (cosine_lr) and the Trainer leaves it
+// alone: a time budget (gat train --minutes) knows its end, which the papers'
+// epoch-count schedules do not, and ends at a small rate instead of wherever
+// the plateau rule happened to be.
+enum class Schedule { plateau, step, cosine };
+// "plateau" / "step" / "cosine" (gat train --lr-schedule, checkpoint metadata "lr_schedule").
+const char* schedule_name(Schedule s);
+// Throws InvalidArgument naming `what` and `name` for anything else.
+Schedule schedule_from_name(const std::string& name, const char* what = "--lr-schedule");
+// Cosine annealing from lr0 (progress 0) to lr_min (progress 1); progress is
+// clamped to [0, 1].
+float cosine_lr(float lr0, float lr_min, double progress);
 
 struct TrainOptions {
   int batch_size = 8;
