@@ -86,6 +86,13 @@ TEST_CASE("joint-limit tables round-trip through JSON", "[character][limits]") {
       CHECK(u.rules[i].degrees.hi[a] == t.rules[i].degrees.hi[a]);
     }
   }
+  JointLimitTable w = t;
+  w.rules.push_back({"hip*", {}, {true, -30.0f, 115.0f}});
+  const JointLimitTable wu = parse_joint_limits(joint_limits_json(w), "roundtrip");
+  CHECK(wu.rules.back().flex.enabled);
+  CHECK(wu.rules.back().flex.lo == -30.0f);
+  CHECK(wu.rules.back().flex.hi == 115.0f);
+  CHECK_FALSE(wu.rules.front().flex.enabled);
   const auto path = write_file("gatcore_limits_ok.json",
                                R"({"format": "gatcore-joint-limits", "version": 1, "default": {"x": [-5, 5]},
                                    "joints": [{"match": "knee*", "x": [0, 90]}]})");
@@ -110,6 +117,9 @@ TEST_CASE("bad joint-limit tables are rejected naming the file, the field and th
       {R"("default": {"z": [-200, 0]}})", {"default.z", "[-200,0]"}},
       {R"("joints": []})", {"missing field \"default\""}},
       {R"("default": {}, "extra": 1})", {"unknown field \"extra\""}},
+      {R"("default": {"flex": [0, 90]}})", {"default", "unknown field \"flex\""}},
+      {R"("default": {}, "joints": [{"match": "a", "flex": [90, 0]}]})", {"joints[0].flex", "min 90 is above max 0"}},
+      {R"("default": {}, "joints": [{"match": "a", "flex": 90}]})", {"joints[0].flex", "90"}},
   };
   for (std::size_t i = 0; i < cases.size(); ++i) {
     const auto path = write_file("gatcore_limits_bad" + std::to_string(i) + ".json", head + cases[i].body);
@@ -183,6 +193,87 @@ TEST_CASE("datasets record the joint-limit table and sample within it", "[charac
   }
 }
 
+namespace {
+// Hips -> UpperLeg.L -> LowerLeg.L -> Foot.L -> Toe.L, the leg hanging down
+// (-Y), the toes to +Z; the upper leg's rest rotation `leg_rest`, the joints'
+// world positions the same whatever it is; inverse binds from the rest; the
+// first n joints.
+Skeleton leg_skeleton(const Quat& leg_rest, int n = 5) {
+  Skeleton s;
+  const std::vector<std::pair<const char*, Vec3>> joints = {
+      {"Hips", {0, 1, 0}}, {"UpperLeg.L", {0.1f, 0.95f, 0}}, {"LowerLeg.L", {0.1f, 0.5f, 0}},
+      {"Foot.L", {0.1f, 0.08f, 0}}, {"Toe.L", {0.1f, 0.02f, 0.12f}}};
+  std::vector<Mat4> g;
+  for (int j = 0; j < n; ++j) {
+    s.names.push_back(joints[std::size_t(j)].first);
+    s.parents.push_back(j - 1);
+    Transform t;
+    const Vec3 p = joints[std::size_t(j)].second;
+    if (j == 0) {
+      t.translation = p;
+    } else {
+      const Mat4 inv = inverse(g.back());
+      t.translation = transform_point(inv, p);
+    }
+    if (j == 1) t.rotation = leg_rest;
+    // Children keep their world orientation: undo the upper leg's rotation below it.
+    if (j == 2) t.rotation = {-leg_rest[0], -leg_rest[1], -leg_rest[2], leg_rest[3]};
+    s.rest_local.push_back(t);
+    g.push_back(j == 0 ? to_matrix(t) : mul(g.back(), to_matrix(t)));
+    s.inverse_bind.push_back(inverse(g.back()));
+    s.root_parent.push_back(mat4_identity());
+  }
+  return s;
+}
+}  // namespace
+
+TEST_CASE("flexion ranges follow each rig's own flexion axis and sign", "[character][limits]") {
+  JointLimitTable t;
+  t.fallback_degrees = {};
+  t.rules.push_back({"upperleg.*", {{-45, -20, -45}, {45, 20, 45}}, {true, -30.0f, 115.0f}});
+  constexpr float r = 3.14159265f / 180.0f;
+  // Identity rest: +X rotation swings the knee backwards (X x -Y = -Z), so flexion is -X.
+  // Rest turned 90 degrees about Y: local Z is world +X, and -Z flexes.
+  const float h = std::sqrt(0.5f);
+  struct Case {
+    Quat rest;
+    int axis, sign;
+  } cases[] = {{{0, 0, 0, 1}, 0, -1}, {{0, h, 0, h}, 2, -1}, {{0, -h, 0, h}, 2, 1}, {{0, 1, 0, 0}, 0, 1}};
+  for (const Case& c : cases) {
+    INFO("upper leg rest rotation " << c.rest[0] << " " << c.rest[1] << " " << c.rest[2] << " " << c.rest[3]);
+    const Skeleton s = leg_skeleton(c.rest);
+    Vec3 front{};
+    const FlexionAxis f = flexion_axis(s, 1, &front);
+    CHECK(front[2] == Approx(0.12f / std::hypot(0.06f, 0.12f)));  // foot -> toe, as given
+    CHECK(f.axis == c.axis);
+    CHECK(f.sign == c.sign);
+    std::vector<std::string> matched;
+    const auto lim = t.limits_for(s, &matched);
+    CHECK_THAT(matched[1], Contains("flex"));
+    const auto a = std::size_t(c.axis), other = 2 - a;
+    CHECK(lim[1].lo[a] == Approx(c.sign > 0 ? -30 * r : -115 * r));
+    CHECK(lim[1].hi[a] == Approx(c.sign > 0 ? 115 * r : 30 * r));
+    CHECK(lim[1].lo[other] == Approx(-45 * r));  // the other axes keep the rule's ranges
+    CHECK(lim[1].lo[1] == Approx(-20 * r));
+    // Posed at 90 degrees of flexion, everything else at rest: the knee is in front of the hip, level with it.
+    std::vector<JointLimit> only(lim.size());
+    only[1].lo[a] = only[1].hi[a] = float(c.sign) * 90 * r;
+    std::mt19937 rng(0);
+    const auto g = global_transforms(s, random_pose(s, bind_pose(s), only, rng));
+    const Vec3 hip = mat4_translation(g[1]), knee = mat4_translation(g[2]);
+    CHECK(knee[2] - hip[2] == Approx(0.45f).margin(1e-3));
+    CHECK(knee[1] - hip[1] == Approx(0.0f).margin(1e-3));
+  }
+  // No foot, no front: the rule's own ranges.
+  const Skeleton n = leg_skeleton({0, 0, 0, 1}, 3);
+  CHECK(flexion_axis(n, 1).axis == -1);
+  std::vector<std::string> matched;
+  const auto lim = t.limits_for(n, &matched);
+  CHECK_THAT(matched[1], Contains("no flexion axis"));
+  CHECK(lim[1].lo[0] == Approx(-45 * r));
+  CHECK(lim[1].hi[0] == Approx(45 * r));
+}
+
 TEST_CASE("the humanoid table bends Quaternius knees backwards and elbows forwards, and lowers the arms", "[character][limits][data]") {
   const auto dir = charfix::data_dir();
   const auto men = dir / "characters" / "quaternius" / "modular_men" / "Farmer.glb";
@@ -235,6 +326,32 @@ TEST_CASE("the humanoid table bends Quaternius knees backwards and elbows forwar
         return (b[0] - a[0]) * fwd[0] + (b[2] - a[2]) * fwd[2];
       };
       const float knee_fwd = moved(knee, foot), elbow_fwd = moved(elbow, hand);
+      // A flexion range on the hips: 90 degrees of it brings the knee forwards
+      // on both rigs and both sides, though they flex about different axes.
+      {
+        JointLimitTable ft = t;
+        for (auto& rule : ft.rules)
+          if (rule.pattern == "upperleg.*") rule.flex = {true, -30.0f, 115.0f};
+        const std::int32_t hip = s.find(std::string("UpperLeg.") + side);
+        REQUIRE(hip >= 0);
+        const FlexionAxis f = flexion_axis(s, hip);
+        REQUIRE(f.axis >= 0);
+        const auto flim = ft.limits_for(s);
+        std::vector<JointLimit> only(flim.size());
+        only[hip].lo[f.axis] = only[hip].hi[f.axis] = float(f.sign) * 1.5708f;
+        REQUIRE(only[hip].hi[f.axis] >= flim[hip].lo[f.axis]);
+        REQUIRE(only[hip].hi[f.axis] <= flim[hip].hi[f.axis]);
+        std::mt19937 rng(0);
+        const auto g = global_transforms(s, random_pose(s, pc.rest, only, rng));
+        const Vec3 a = mat4_translation(rest_g[knee]), b = mat4_translation(g[knee]);
+        const Vec3 h = mat4_translation(rest_g[hip]);
+        const float thigh = std::hypot(a[0] - h[0], a[1] - h[1], a[2] - h[2]);
+        const float fwd_move = (b[0] - a[0]) * fwd[0] + (b[2] - a[2]) * fwd[2];
+        INFO(file << " side " << side << ": hip flexion axis " << f.axis << " sign " << f.sign << ", the knee moves "
+                  << fwd_move / thigh << " thigh lengths forward and " << (b[1] - a[1]) / thigh << " up");
+        CHECK(fwd_move > 0.8f * thigh);
+        CHECK(b[1] - a[1] > 0.8f * thigh);
+      }
       INFO(file << " side " << side << ": ankle moves " << knee_fwd << " forward, wrist " << elbow_fwd);
       CHECK(knee_fwd < 0.0f);
       CHECK(elbow_fwd > 0.0f);

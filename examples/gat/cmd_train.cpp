@@ -47,9 +47,10 @@ void on_sigint(int) {
 }
 
 struct TrainArgs {
-  std::string model_name = "densegats", out = "model.gcm", resume, data, task, curve, loss, joint_columns, keep_best,
+  std::string model_name = "densegats", out = "model.gcm", resume, init, data, task, curve, loss, joint_columns, keep_best,
               sampling, precision, lr_schedule;
   bool lr_set = false;  // --lr given (a resumed run otherwise continues at the checkpoint's rate)
+  std::vector<std::string> architecture_flags;  // given flags that --init takes from its checkpoint instead
   long epochs = 10, seed = 0, batch = 0, samples = 64;
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
@@ -105,6 +106,11 @@ gat::Runner gat::setup_train(CLI::App& gat) {
       ->check(int_in(1, 10000000))->capture_default_str();
   c.add_option("--resume", a->resume,
                "continue from a checkpoint written by gat train (model, data, seed and batch size from the file)");
+  c.add_option("--init", a->init,
+               "fine-tune: start from a checkpoint's weights and input statistics (its model, loss, linear skip and "
+               "joint columns) on --data, which may be another dataset with the same input columns (e.g. your own "
+               "characters and targets, or other poses); a new optimiser from epoch 0 at --lr")
+      ->excludes("--resume");
   add_seed(c, a->seed, "initialisation, sampling and data seed");
   add_threads(c, a->common);
   c.add_option("--batch", a->batch, "characters per batch (default: paper, 8 or 12)")->check(int_in(1, 4096));
@@ -163,6 +169,8 @@ gat::Runner gat::setup_train(CLI::App& gat) {
     TrainArgs args = *a;
     if (!c.count("--samples")) args.samples = -1;  // not given: the source's default
     args.lr_set = c.count("--lr") > 0;
+    for (const char* f : {"--model", "--task", "--loss", "--linear-skip", "--joint-columns", "--pair-scorer"})
+      if (c.count(f)) args.architecture_flags.push_back(f);
     return run_train(std::move(args));
   };
 }
@@ -170,7 +178,7 @@ gat::Runner gat::setup_train(CLI::App& gat) {
 namespace {
 
 int run_train(TrainArgs a) {
-  std::string model_name = a.model_name, out = a.out, resume = a.resume, data = a.data, task = a.task,
+  std::string model_name = a.model_name, out = a.out, resume = a.resume, init = a.init, data = a.data, task = a.task,
               curve = a.curve, loss = a.loss, joint_columns = a.joint_columns, keep_best = a.keep_best;
   long epochs = a.epochs, seed = a.seed, batch = a.batch, samples = a.samples < 0 ? 64 : a.samples;
   const bool samples_set = a.samples >= 0;
@@ -200,9 +208,26 @@ int run_train(TrainArgs a) {
   }
   const Device dev = gat::device_from_flag(a.common.device, "train");
 
+  if (!init.empty() && data.empty()) {
+    std::fprintf(stderr, "gat train: --init %s fine-tunes on a dataset: give --data\n", init.c_str());
+    return 2;
+  }
+  if (!init.empty() && !a.architecture_flags.empty()) {
+    std::fprintf(stderr, "gat train: --init %s: the model, its task, loss, linear skip and columns come from the "
+                         "checkpoint (drop %s)\n", init.c_str(), a.architecture_flags.front().c_str());
+    return 2;
+  }
+  // The checkpoint the model comes from: a resumed run's or a fine-tuned one's.
+  const std::string from = resume.empty() ? init : resume;
   std::unique_ptr<Model> model;
   Normaliser norm;
   LoadedModel loaded;
+  if (!init.empty()) {
+    gat::Activity reading("reading the checkpoint " + init);
+    loaded = load_checkpoint(init);
+    model = std::move(loaded.model);
+    norm = loaded.norm;
+  }
   if (!resume.empty()) {
     gat::Activity reading("reading the checkpoint " + resume);
     loaded = load_checkpoint(resume);
@@ -244,15 +269,15 @@ int run_train(TrainArgs a) {
       td = std::make_unique<character::TrainingData>(character::load_training_data(data, loading.callback()));
     }
     if (resume.empty() && !samples_set) samples = 0;
-    if (resume.empty()) td->nearest_joints = character::parse_joint_columns(joint_columns, "--joint-columns");
-    if (!resume.empty()) {
+    if (from.empty()) td->nearest_joints = character::parse_joint_columns(joint_columns, "--joint-columns");
+    if (!from.empty()) {
       const auto& md = loaded.file.metadata;
-      if (md.count("data_hash") && md.at("data_hash") != td->hash) {
+      if (!resume.empty() && md.count("data_hash") && md.at("data_hash") != td->hash) {
         std::fprintf(stderr, "gat train: %s has changed since %s was trained on it (hash %s, checkpoint %s)\n",
                      data.c_str(), resume.c_str(), td->hash.c_str(), md.at("data_hash").c_str());
         return 2;
       }
-      td->nearest_joints = character::checkpoint_nearest_joints(loaded.file, resume);
+      td->nearest_joints = character::checkpoint_nearest_joints(loaded.file, from);
       if (!joint_columns.empty() &&
           character::parse_joint_columns(joint_columns, "--joint-columns") != td->nearest_joints) {
         std::fprintf(stderr, "gat train: %s was trained with --joint-columns %s; a resumed run keeps it\n",
@@ -262,12 +287,12 @@ int run_train(TrainArgs a) {
       if (td->nearest_joints == 0 && md.count("skeleton") &&
           md.at("skeleton") != character::joined_bone_names(td->super)) {
         std::fprintf(stderr, "gat train: %s's super skeleton differs from the one %s was trained on\n", data.c_str(),
-                     resume.c_str());
+                     from.c_str());
         return 2;
       }
     }
   }
-  if (resume.empty()) {
+  if (from.empty()) {
     ModelConfig cfg = ModelConfig::defaults(model_name, demo::kTubeFeatures);
     if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
     if (td && td->nearest_joints > 0 && cfg.task != Task::displacement) {
@@ -327,7 +352,7 @@ int run_train(TrainArgs a) {
   if (td && !any_skeleton) {
     GATCORE_CHECK(cfg.in_dim == td->feature_dim(cfg.task) &&
                       (cfg.task != Task::weights || cfg.out_dim == td->super.num_bones()),
-                  "model '", resume, "' takes ", cfg.in_dim, " features / ", cfg.out_dim, " outputs; dataset ", data,
+                  "model '", from, "' takes ", cfg.in_dim, " features / ", cfg.out_dim, " outputs; dataset ", data,
                   " has ", td->feature_dim(cfg.task), " features over ", td->super.num_bones(), " bones");
   }
   int geodesic_k = 1;
@@ -352,8 +377,10 @@ int run_train(TrainArgs a) {
                  data.empty() ? "the embedded data" : data.c_str());
     return 2;
   }
-  if (resume.empty()) norm = Normaliser::fit(train, cfg.task == Task::displacement);
-  if (resume.empty() && cfg.linear_skip) {
+  // A fine-tuned model keeps the statistics its weights were trained with
+  // (and its linear skip, trained along).
+  if (from.empty()) norm = Normaliser::fit(train, cfg.task == Task::displacement);
+  if (from.empty() && cfg.linear_skip) {
     const LinearMap f = fit_linear_skip(*model, train, norm);
     if (!quiet)
       std::printf("linear skip: least-squares fit on %lld training vertices, MSE %.6f (predicting zero: %.6f)\n",
@@ -422,6 +449,13 @@ int run_train(TrainArgs a) {
     extra["data"] = "dataset";
     extra["data_path"] = std::filesystem::absolute(data).string();
     extra["data_hash"] = td->hash;
+    if (!init.empty()) {  // where a fine-tuned model started (a resumed fine-tune keeps it)
+      extra["init"] = std::filesystem::absolute(init).string();
+      if (loaded.file.metadata.count("epoch")) extra["init_epoch"] = loaded.file.metadata.at("epoch");
+    } else if (!resume.empty()) {
+      for (const char* k : {"init", "init_epoch"})
+        if (loaded.file.metadata.count(k)) extra[k] = loaded.file.metadata.at(k);
+    }
     extra["skeleton"] = character::joined_bone_names(td->super);
     if (!any_skeleton && td->nearest_joints == 0) {
       // Which bones every training character had: a character lacking one of

@@ -1,5 +1,7 @@
 #include "gatcore/character/deform/bone_heat.hpp"
 
+#include "gatcore/character/rig/bone_axis.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -174,29 +176,10 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
       for (double& x : d) x /= l;
     return d;
   };
-  // The rig's own bone-axis convention (Blender: local +Y along the bone;
-  // many FBX rigs: +X): the signed local axis that best points from a joint
-  // to its only child, by vote over the joints with one child. A leaf's bone
-  // follows that axis of its own frame (a foot without toe joints points
-  // forward, not down its shin).
-  auto axis = [&](std::int32_t j, int a) {
-    V3 d{bind[j][4 * (a / 2)], bind[j][4 * (a / 2) + 1], bind[j][4 * (a / 2) + 2]};
-    const double l = norm(d), sg = a % 2 ? -1.0 : 1.0;
-    for (double& x : d) x = l > 0 ? sg * x / l : 0.0;
-    return d;
-  };
-  int votes[6] = {0, 0, 0, 0, 0, 0};
-  for (std::int32_t j = 0; j < nj; ++j) {
-    if (children[j].size() != 1) continue;
-    const V3 d = dir(j, children[j][0]);
-    if (norm(d) == 0) continue;
-    int best = 0;
-    for (int a = 1; a < 6; ++a)
-      if (dot(axis(j, a), d) > dot(axis(j, best), d)) best = a;
-    ++votes[best];
-  }
-  const int conv = static_cast<int>(std::max_element(votes, votes + 6) - votes);
-  const bool have_conv = votes[conv] > 0;
+  // A leaf's bone follows the rig's own bone-axis convention
+  // (rig/bone_axis.hpp): a foot without toe joints points forward, not down
+  // its shin.
+  const BoneAxis conv = bone_axis_convention(s);
   std::vector<std::vector<BoneSegment>> seg(static_cast<std::size_t>(nj));
   for (std::int32_t j = 0; j < nj; ++j) {
     const std::int32_t p = s.parents[j];
@@ -214,7 +197,8 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
     Vec3 tail = head[j];
     if (p >= 0) {
       const double len = leaf_extension * norm(sub(to_v3(head[j]), to_v3(head[p])));
-      const V3 d = have_conv ? axis(j, conv) : dir(p, j);
+      const Vec3 b = bone_direction(s, j, conv);
+      const V3 d{b[0], b[1], b[2]};
       for (int c = 0; c < 3; ++c) tail[c] += static_cast<float>(len * d[c]);
     }
     seg[j].push_back({head[j], tail});

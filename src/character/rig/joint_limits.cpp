@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gatcore/character/rig/bone_axis.hpp"
+#include "gatcore/character/rig/pose.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/error.hpp"
 
@@ -32,7 +34,8 @@ JointLimit parse_limit(const nlohmann::json& j, const std::string& source, const
   JointLimit l;
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& k = it.key();
-    GATCORE_CHECK(k == "x" || k == "y" || k == "z" || k == "match", source, ": ", where, ": unknown field \"", k, "\"");
+    GATCORE_CHECK(k == "x" || k == "y" || k == "z" || k == "match" || (k == "flex" && where != "default"), source,
+                  ": ", where, ": unknown field \"", k, "\"");
   }
   for (int a = 0; a < 3; ++a) {
     if (!j.contains(kAxes[a])) continue;
@@ -48,6 +51,30 @@ JointLimit parse_limit(const nlohmann::json& j, const std::string& source, const
     l.hi[a] = static_cast<float>(hi);
   }
   return l;
+}
+
+// "flex": [lo, hi] of a joint rule.
+FlexionRange parse_flex(const nlohmann::json& j, const std::string& source, const std::string& where) {
+  FlexionRange f;
+  if (!j.contains("flex")) return f;
+  const nlohmann::json& r = j.at("flex");
+  const std::string field = where + ".flex";
+  GATCORE_CHECK(r.is_array() && r.size() == 2 && r[0].is_number() && r[1].is_number(), source, ": ", field,
+                ": expected [min, max] flexion in degrees, got ", r.dump());
+  const double lo = r[0].get<double>(), hi = r[1].get<double>();
+  GATCORE_CHECK(std::isfinite(lo) && std::isfinite(hi) && lo >= -180.0 && hi <= 180.0, source, ": ", field,
+                ": angles must be finite degrees in [-180, 180], got ", r.dump());
+  GATCORE_CHECK(lo <= hi, source, ": ", field, ": min ", lo, " is above max ", hi);
+  f.enabled = true;
+  f.lo = static_cast<float>(lo);
+  f.hi = static_cast<float>(hi);
+  return f;
+}
+
+Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+float dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
 
 nlohmann::json limit_json(const JointLimit& l) {
@@ -132,10 +159,12 @@ std::vector<JointLimit> JointLimitTable::limits_for(const Skeleton& s, std::vect
     }
     const std::string n = normalise_bone_name(s.names[j]);
     const JointLimit* l = &fallback_degrees;
+    const FlexionRange* flex = nullptr;
     std::string which = "(default)";
     for (const auto& rule : rules)
       if (glob_match(rule.pattern, n)) {
         l = &rule.degrees;
+        flex = &rule.flex;
         which = rule.pattern;
         break;
       }
@@ -143,9 +172,60 @@ std::vector<JointLimit> JointLimitTable::limits_for(const Skeleton& s, std::vect
       out[j].lo[a] = l->lo[a] * r;
       out[j].hi[a] = l->hi[a] * r;
     }
+    if (flex && flex->enabled) {
+      const FlexionAxis f = flexion_axis(s, j);
+      if (f.axis >= 0) {
+        const auto a = std::size_t(f.axis);
+        out[j].lo[a] = (f.sign > 0 ? flex->lo : -flex->hi) * r;
+        out[j].hi[a] = (f.sign > 0 ? flex->hi : -flex->lo) * r;
+        which += f.axis == 0 ? (f.sign > 0 ? " (flex +x)" : " (flex -x)") : (f.sign > 0 ? " (flex +z)" : " (flex -z)");
+      } else {
+        which += " (no flexion axis: x/y/z ranges)";
+      }
+    }
     if (matched) (*matched)[j] = which;
   }
   return out;
+}
+
+FlexionAxis flexion_axis(const Skeleton& s, std::int32_t j, Vec3* front_out) {
+  GATCORE_CHECK(j >= 0 && j < s.num_joints(), "flexion_axis: joint ", j, " of ", s.num_joints());
+  const std::vector<Mat4> g = global_transforms(s, bind_pose(s));
+  // The front: where the feet point (each foot* joint's bone: to its toe, or
+  // for a foot without toes along the rig's bone axis), summed.
+  const BoneAxis conv = bone_axis_convention(s);
+  Vec3 front{0.0f, 0.0f, 0.0f};
+  for (std::int32_t f = 0; f < s.num_joints(); ++f) {
+    if (normalise_bone_name(s.names[std::size_t(f)]).rfind("foot", 0) != 0) continue;
+    const Vec3 d = bone_direction(s, f, conv);
+    for (int k = 0; k < 3; ++k) front[std::size_t(k)] += d[std::size_t(k)];
+  }
+  const float fl = std::sqrt(dot(front, front));
+  if (!(fl > 1e-3f)) return {};
+  for (float& v : front) v /= fl;
+  if (front_out) *front_out = front;
+  std::int32_t child = -1;
+  for (std::int32_t c = 0; c < s.num_joints() && child < 0; ++c)
+    if (s.parents[std::size_t(c)] == j) child = c;
+  if (child < 0) return {};
+  const Vec3 bone = sub(mat4_translation(g[std::size_t(child)]), mat4_translation(g[std::size_t(j)]));
+  const float bl = std::sqrt(dot(bone, bone));
+  if (!(bl > 0.0f)) return {};
+  FlexionAxis best;
+  float best_score = 0.5f;  // per radian, in bone lengths: below that the axis mostly swings the child sideways
+  for (int a : {0, 2}) {
+    const Mat4& m = g[std::size_t(j)];
+    Vec3 axis{m[std::size_t(a * 4)], m[std::size_t(a * 4 + 1)], m[std::size_t(a * 4 + 2)]};
+    const float al = std::sqrt(dot(axis, axis));
+    if (!(al > 0.0f)) continue;
+    for (float& v : axis) v /= al;
+    const float score = dot(cross(axis, bone), front) / bl;  // the child's speed to the front per radian
+    if (std::fabs(score) > best_score) {
+      best_score = std::fabs(score);
+      best = {a, score > 0.0f ? 1 : -1};
+    }
+  }
+  return best;
 }
 
 JointLimitTable parse_joint_limits(const std::string& text, const std::string& source) {
@@ -183,7 +263,8 @@ JointLimitTable parse_joint_limits(const std::string& text, const std::string& s
                         !js[i].at("match").get<std::string>().empty(),
                     source, ": ", where, ".match: expected a non-empty name pattern, got ",
                     js[i].is_object() && js[i].contains("match") ? js[i].at("match").dump() : std::string("nothing"));
-      t.rules.push_back({js[i].at("match").get<std::string>(), parse_limit(js[i], source, where)});
+      t.rules.push_back({js[i].at("match").get<std::string>(), parse_limit(js[i], source, where),
+                         parse_flex(js[i], source, where)});
     }
   }
   return t;
@@ -208,6 +289,7 @@ std::string joint_limits_json(const JointLimitTable& t) {
   for (const auto& r : t.rules) {
     nlohmann::json e = limit_json(r.degrees);
     e["match"] = r.pattern;
+    if (r.flex.enabled) e["flex"] = {r.flex.lo, r.flex.hi};
     j["joints"].push_back(e);
   }
   return j.dump(2);

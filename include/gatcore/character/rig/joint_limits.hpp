@@ -11,6 +11,19 @@
 //    "joints": [{"match": "lowerleg.*", "x": [0, 120], "y": [-3, 3], "z": [-3, 3]}, ...]}
 // Axes are the joint's local X, Y, Z (Euler XYZ after the rest rotation, as
 // random_pose applies them); an absent axis is fixed at 0.
+//
+// A rule may also give "flex": [lo, hi], degrees of flexion (positive: the
+// joint's first child moves towards the character's front, where the foot*
+// joints' bones point in the bind pose: to the toes, or along the rig's bone
+// axis for feet without toes, rig/bone_axis.hpp). Rigs disagree on the axis and
+// the sign of, say, hip flexion (the Quaternius men flex the hips about Z,
+// mirrored left / right, the women about X), so one x/y/z range cannot give
+// a deep flexion without an equally deep hyperextension somewhere. limits_for
+// finds, per joint, which of local X and Z moves the child most along the
+// front and in which sign, and gives that axis [lo, hi] in flexion terms; the
+// other axes keep the rule's x/y/z ranges. Where there is no front (no joint
+// named foot*) or the child moves sideways about both axes, the rule's x/y/z
+// ranges apply unchanged.
 #include <string>
 #include <vector>
 
@@ -19,10 +32,27 @@
 
 namespace gatcore::character {
 
+struct FlexionRange {
+  bool enabled = false;
+  float lo = 0.0f, hi = 0.0f;  // degrees; positive flexes (the child moves to the front)
+};
+
 struct JointLimitRule {
   std::string pattern;  // glob on normalised names: '*' any run, '?' one character
   JointLimit degrees;   // lo / hi per axis, in degrees
+  FlexionRange flex;    // the file's "flex" (see above)
 };
+
+// Which local axis (0 = X, 2 = Z) of joint `j` in the bind pose flexes it,
+// and its sign (+1: a positive angle moves the first child to the front);
+// axis -1 when the skeleton has no foot* joint, `j` no child, or neither axis
+// moves the child along the front by at least half its bone length per
+// radian. `front` (if given) receives the unit front direction used.
+struct FlexionAxis {
+  int axis = -1;
+  int sign = 0;
+};
+FlexionAxis flexion_axis(const Skeleton& s, std::int32_t j, Vec3* front = nullptr);
 
 struct JointLimitTable {
   std::string name = "custom";  // "humanoid" for the built-in table, else the file it came from
