@@ -173,6 +173,45 @@ TEST_CASE("a known pose moves every mapped limb, from every convention onto ever
   CHECK(fingers >= 60);
 }
 
+TEST_CASE("a turned-round body keeps its legs at its hips, on rigs whose legs hang off the root", "[character][rig][retarget]") {
+  // The CMU jump turns the actor round; the Quaternius women's thighs hang
+  // off Root, not Hips. The hip joints are rigid parts of the pelvis: in the
+  // pelvis's own frame they stay where the bind pose has them, however the
+  // body turns (the left leg used to stay at its rest place beside the
+  // unturned root, which after half a turn is the right hip).
+  std::vector<rigfix::PartPose> turned = known_pose();
+  turned[0].zxy["pelvis"] = {0, 0, 160};
+  const Motion motion = load_bvh(charfix::write_temp("cmu_turned.bvh", rigfix::bvh(spec_named("cmu"), turned)));
+  int rooted = 0;
+  for (const rigfix::Spec& dst : rigfix::specs()) {
+    INFO("cmu -> " << dst.id);
+    const Skeleton target = rigfix::skeleton(dst);
+    const RigMapping mt = map_rig(target);
+    const auto g0 = global_transforms(target, world_bind_pose(target, mat4_identity()));
+    const auto g1 = global_transforms(target, retarget(motion, target, mat4_identity()).frames[1]);
+    const std::int32_t pelvis = mt.find("pelvis");
+    REQUIRE(pelvis >= 0);
+    // The pelvis did turn: its horizontal local axis swings by more than 120 degrees.
+    float turn = 0;
+    for (int c = 0; c < 3; ++c)
+      turn = std::max(turn, angle_deg({g0[pelvis][4 * c], g0[pelvis][4 * c + 1], g0[pelvis][4 * c + 2]},
+                                      {g1[pelvis][4 * c], g1[pelvis][4 * c + 1], g1[pelvis][4 * c + 2]}));
+    CHECK(turn > 120.0f);
+    for (const char* part : {"thigh.l", "thigh.r"}) {
+      const std::int32_t t = mt.find(part);
+      REQUIRE(t >= 0);
+      rooted += target.parents[t] != pelvis;
+      const Vec3 a = transform_point(inverse(g0[pelvis]), mat4_translation(g0[t]));
+      const Vec3 b = transform_point(inverse(g1[pelvis]), mat4_translation(g1[t]));
+      const Vec3 d = sub(b, a);
+      INFO(part << " in the pelvis frame: bind " << a[0] << " " << a[1] << " " << a[2] << ", turned " << b[0] << " " << b[1]
+                << " " << b[2]);
+      CHECK(std::sqrt(dot(d, d)) < 1e-3f * std::sqrt(dot(a, a)) + 1e-5f);
+    }
+  }
+  CHECK(rooted >= 2);  // the Quaternius fixture's thighs hang off Root
+}
+
 TEST_CASE("rigs that are not humanoids are refused by name, or get root motion only on request", "[character][rig][retarget]") {
   const rigfix::Spec cmu = spec_named("cmu");
   const Motion motion = load_bvh(charfix::write_temp("cmu_pose.bvh", rigfix::bvh(cmu, known_pose())));

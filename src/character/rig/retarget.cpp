@@ -372,7 +372,12 @@ Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_
     else if (base == "shin") parent = "thigh";
     else if (base == "foot") parent = "shin";
     else if (base == "toe") parent = "foot";
-    const std::int32_t a = parent.empty() ? -1 : mt.find(parent + side);
+    // Thighs hang off the pelvis: rigs whose legs sit on a root above the
+    // hips (the Quaternius women: Root -> Hips, Root -> UpperLeg.L) would
+    // otherwise keep the legs at their rest places beside an unturned root
+    // while the pelvis turns (a character turned round had its left leg at
+    // its right hip).
+    const std::int32_t a = base == "thigh" ? mt.find("pelvis") : parent.empty() ? -1 : mt.find(parent + side);
     if (a >= 0 && !is_ancestor(target, a, t) && !is_ancestor(target, t, a)) b.anchor[t] = a;
   }
   return apply(motion, target, bind_to_world, b);
