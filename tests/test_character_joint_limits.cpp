@@ -400,4 +400,37 @@ TEST_CASE("pose_limit_excess: zero within the limits, the overshoot outside them
   CHECK(pose_limit_excess(ch.skeleton, rest, p, limits, j).radians == 0.0f);
   CHECK(pose_limit_excess(ch.skeleton, rest, p, limits, 0).radians == Approx(0.3f).margin(1e-4));
   CHECK_THROWS_WITH(pose_limit_excess(ch.skeleton, rest, p, {}), Contains("0 limits"));
+
+  // Legs on a root beside the hips (Root -> Hips, Root -> UpperLeg): a body
+  // turned round turns the hips and, relative to Root, the thigh with them;
+  // that is the orientation, not the thigh's own rotation.
+  Skeleton r;
+  r.names = {"Root", "Hips", "UpperLeg.L", "LowerLeg.L"};
+  r.parents = {-1, 0, 0, 2};
+  const std::vector<Vec3> at = {{0, 0, 0}, {0, 1, 0}, {0.1f, 0.95f, 0}, {0.1f, 0.5f, 0}};
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    Transform t;
+    const std::int32_t par = r.parents[k];
+    t.translation = par < 0 ? at[k] : Vec3{at[k][0] - at[std::size_t(par)][0], at[k][1] - at[std::size_t(par)][1],
+                                           at[k][2] - at[std::size_t(par)][2]};
+    r.rest_local.push_back(t);
+    Mat4 ibm = mat4_identity();
+    ibm[12] = -at[k][0], ibm[13] = -at[k][1], ibm[14] = -at[k][2];
+    r.inverse_bind.push_back(ibm);
+    r.root_parent.push_back(mat4_identity());
+  }
+  std::vector<JointLimit> small(4);
+  for (auto& l : small) l.lo = {-0.2f, -0.2f, -0.2f}, l.hi = {0.2f, 0.2f, 0.2f};
+  const Pose rr = bind_pose(r);
+  Pose turned = rr;
+  const Quat turn = quat_from_axis_angle({0, 1, 0}, 2.5f);
+  turned.local[1].rotation = turn;
+  turned.local[2].rotation = turn;
+  CHECK(pose_limit_excess(r, rr, turned, small, 1).radians == Approx(0.0f).margin(1e-5));
+  CHECK(pose_limit_excess(r, rr, turned, small).radians > 2.0f);  // without the orientation joint: read as the thigh's
+  turned.local[2].rotation = quat_mul(turn, quat_from_axis_angle({1, 0, 0}, 0.5f));  // and a bend of its own
+  const LimitExcess own = pose_limit_excess(r, rr, turned, small, 1);
+  CHECK(own.radians == Approx(0.3f).margin(1e-4));
+  CHECK(own.joint == 2);
+  CHECK(own.axis == 0);
 }

@@ -304,11 +304,29 @@ LimitExcess pose_limit_excess(const Skeleton& s, const Pose& rest, const Pose& p
                 " posed transforms for ", J, " joints");
   std::vector<char> skip(static_cast<std::size_t>(J), 0);
   for (std::int32_t j = orientation_joint; j >= 0 && j < J; j = s.parents[std::size_t(j)]) skip[std::size_t(j)] = 1;
+  // A joint hanging off an ancestor of the orientation joint instead of
+  // under it (the Quaternius women's thighs on Root, beside Hips) is measured
+  // against the orientation joint: its rotation relative to Root carries the
+  // character's turning, which is not the joint's own (a turned-round body
+  // read as thighs 130 degrees outside their limits).
+  std::vector<Mat4> g, g0;
+  if (orientation_joint >= 0 && orientation_joint < J) {
+    g = global_transforms(s, pose);
+    g0 = global_transforms(s, rest);
+  }
+  auto rot = [](const Mat4& m) { return to_transform(m).rotation; };
+  auto inv = [](const Quat& q) { return Quat{-q[0], -q[1], -q[2], q[3]}; };
   LimitExcess worst;
   for (std::int32_t j = 0; j < J; ++j) {
     if (s.parents[std::size_t(j)] < 0 || skip[std::size_t(j)]) continue;  // roots carry the motion's root movement
     const Quat& r = rest.local[std::size_t(j)].rotation;
-    const Quat q = quat_normalize(quat_mul({-r[0], -r[1], -r[2], r[3]}, pose.local[std::size_t(j)].rotation));
+    Quat q = quat_normalize(quat_mul(inv(r), pose.local[std::size_t(j)].rotation));
+    if (!g.empty() && skip[std::size_t(s.parents[std::size_t(j)])]) {
+      const auto o = std::size_t(orientation_joint);
+      const Quat a = quat_mul(inv(rot(g0[o])), rot(g0[std::size_t(j)]));
+      const Quat b = quat_mul(inv(rot(g[o])), rot(g[std::size_t(j)]));
+      q = quat_normalize(quat_mul(inv(a), b));
+    }
     // Rotation matrix of q; R = Rx(a) Ry(b) Rz(c): R02 = sin b, a = atan2(-R12, R22), c = atan2(-R01, R00).
     const double x = q[0], y = q[1], z = q[2], w = q[3];
     const double r00 = 1 - 2 * (y * y + z * z), r01 = 2 * (x * y - z * w), r02 = 2 * (x * z + y * w);
