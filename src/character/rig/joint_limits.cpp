@@ -6,6 +6,7 @@
 #include <fstream>
 #include <numbers>
 #include <sstream>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -27,6 +28,18 @@ JointLimit deg(float xlo, float xhi, float ylo, float yhi, float zlo, float zhi)
 
 constexpr const char* kAxes[3] = {"x", "y", "z"};
 
+// [lo, hi] in degrees within [-180, 180], lo <= hi; errors name the field.
+std::pair<float, float> parse_range(const nlohmann::json& r, const std::string& source, const std::string& field,
+                                    const char* expected) {
+  GATCORE_CHECK(r.is_array() && r.size() == 2 && r[0].is_number() && r[1].is_number(), source, ": ", field,
+                ": expected ", expected, ", got ", r.dump());
+  const double lo = r[0].get<double>(), hi = r[1].get<double>();
+  GATCORE_CHECK(std::isfinite(lo) && std::isfinite(hi) && lo >= -180.0 && hi <= 180.0, source, ": ", field,
+                ": angles must be finite degrees in [-180, 180], got ", r.dump());
+  GATCORE_CHECK(lo <= hi, source, ": ", field, ": min ", lo, " is above max ", hi);
+  return {static_cast<float>(lo), static_cast<float>(hi)};
+}
+
 // One limit object {"x": [lo, hi], ...}; absent axes are fixed at 0.
 JointLimit parse_limit(const nlohmann::json& j, const std::string& source, const std::string& where) {
   GATCORE_CHECK(j.is_object(), source, ": ", where, ": expected an object with \"x\", \"y\", \"z\" ranges, got ",
@@ -39,16 +52,9 @@ JointLimit parse_limit(const nlohmann::json& j, const std::string& source, const
   }
   for (int a = 0; a < 3; ++a) {
     if (!j.contains(kAxes[a])) continue;
-    const nlohmann::json& r = j.at(kAxes[a]);
-    const std::string field = where + "." + kAxes[a];
-    GATCORE_CHECK(r.is_array() && r.size() == 2 && r[0].is_number() && r[1].is_number(), source, ": ", field,
-                  ": expected [min, max] in degrees, got ", r.dump());
-    const double lo = r[0].get<double>(), hi = r[1].get<double>();
-    GATCORE_CHECK(std::isfinite(lo) && std::isfinite(hi) && lo >= -180.0 && hi <= 180.0, source, ": ", field,
-                  ": angles must be finite degrees in [-180, 180], got ", r.dump());
-    GATCORE_CHECK(lo <= hi, source, ": ", field, ": min ", lo, " is above max ", hi);
-    l.lo[a] = static_cast<float>(lo);
-    l.hi[a] = static_cast<float>(hi);
+    const auto [lo, hi] = parse_range(j.at(kAxes[a]), source, where + "." + kAxes[a], "[min, max] in degrees");
+    l.lo[a] = lo;
+    l.hi[a] = hi;
   }
   return l;
 }
@@ -57,17 +63,10 @@ JointLimit parse_limit(const nlohmann::json& j, const std::string& source, const
 FlexionRange parse_flex(const nlohmann::json& j, const std::string& source, const std::string& where) {
   FlexionRange f;
   if (!j.contains("flex")) return f;
-  const nlohmann::json& r = j.at("flex");
-  const std::string field = where + ".flex";
-  GATCORE_CHECK(r.is_array() && r.size() == 2 && r[0].is_number() && r[1].is_number(), source, ": ", field,
-                ": expected [min, max] flexion in degrees, got ", r.dump());
-  const double lo = r[0].get<double>(), hi = r[1].get<double>();
-  GATCORE_CHECK(std::isfinite(lo) && std::isfinite(hi) && lo >= -180.0 && hi <= 180.0, source, ": ", field,
-                ": angles must be finite degrees in [-180, 180], got ", r.dump());
-  GATCORE_CHECK(lo <= hi, source, ": ", field, ": min ", lo, " is above max ", hi);
+  const auto [lo, hi] = parse_range(j.at("flex"), source, where + ".flex", "[min, max] flexion in degrees");
   f.enabled = true;
-  f.lo = static_cast<float>(lo);
-  f.hi = static_cast<float>(hi);
+  f.lo = lo;
+  f.hi = hi;
   return f;
 }
 
