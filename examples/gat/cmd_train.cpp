@@ -222,17 +222,13 @@ int run_train(TrainArgs a) {
   std::unique_ptr<Model> model;
   Normaliser norm;
   LoadedModel loaded;
-  if (!init.empty()) {
-    gat::Activity reading("reading the checkpoint " + init);
-    loaded = load_checkpoint(init);
+  if (!from.empty()) {
+    gat::Activity reading("reading the checkpoint " + from);
+    loaded = load_checkpoint(from);
     model = std::move(loaded.model);
     norm = loaded.norm;
   }
   if (!resume.empty()) {
-    gat::Activity reading("reading the checkpoint " + resume);
-    loaded = load_checkpoint(resume);
-    model = std::move(loaded.model);
-    norm = loaded.norm;
     // The run's data and batching come from the checkpoint, so the resumed
     // run continues exactly where the interrupted one stopped.
     const auto& md = loaded.file.metadata;

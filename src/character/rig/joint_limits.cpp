@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -114,7 +115,7 @@ JointLimitTable JointLimitTable::default_humanoid() {
   JointLimitTable t;
   t.name = "humanoid";
   t.fallback_degrees = deg(-10, 10, -10, 10, -10, 10);
-  auto add = [&](const char* pattern, JointLimit l) { t.rules.push_back({pattern, l}); };
+  auto add = [&](const char* pattern, JointLimit l) { t.rules.push_back({pattern, l, {}}); };
   add("hips", deg(-10, 10, -15, 15, -8, 8));
   add("abdomen", deg(-15, 20, -15, 15, -10, 10));
   add("torso", deg(-10, 15, -15, 15, -10, 10));
@@ -147,10 +148,64 @@ JointLimitTable JointLimitTable::default_humanoid() {
   return t;
 }
 
+namespace {
+
+// What flexion_axis reads of a skeleton, once per skeleton: the bind pose's
+// joint-to-world matrices and the character's front (where the foot* joints'
+// bones point: to the toes, or along the rig's bone axis for feet without
+// toes, summed; zero when there are no feet).
+struct BindFront {
+  std::vector<Mat4> g;
+  Vec3 front{0.0f, 0.0f, 0.0f};
+};
+
+BindFront bind_front(const Skeleton& s) {
+  BindFront b{global_transforms(s, bind_pose(s)), {0.0f, 0.0f, 0.0f}};
+  const BoneAxis conv = bone_axis_convention(s);
+  for (std::int32_t f = 0; f < s.num_joints(); ++f) {
+    if (normalise_bone_name(s.names[std::size_t(f)]).rfind("foot", 0) != 0) continue;
+    const Vec3 d = bone_direction(s, f, conv);
+    for (int k = 0; k < 3; ++k) b.front[std::size_t(k)] += d[std::size_t(k)];
+  }
+  const float fl = std::sqrt(dot(b.front, b.front));
+  if (!(fl > 1e-3f)) return {b.g, {0.0f, 0.0f, 0.0f}};
+  for (float& v : b.front) v /= fl;
+  return b;
+}
+
+FlexionAxis flexion_axis(const Skeleton& s, const BindFront& b, std::int32_t j) {
+  if (dot(b.front, b.front) == 0.0f) return {};
+  std::int32_t child = -1;
+  for (std::int32_t c = 0; c < s.num_joints() && child < 0; ++c)
+    if (s.parents[std::size_t(c)] == j) child = c;
+  if (child < 0) return {};
+  const Mat4& m = b.g[std::size_t(j)];
+  const Vec3 bone = sub(mat4_translation(b.g[std::size_t(child)]), mat4_translation(m));
+  const float bl = std::sqrt(dot(bone, bone));
+  if (!(bl > 0.0f)) return {};
+  FlexionAxis best;
+  float best_score = 0.5f;  // per radian, in bone lengths: below that the axis mostly swings the child sideways
+  for (int a : {0, 2}) {
+    Vec3 axis{m[std::size_t(a * 4)], m[std::size_t(a * 4 + 1)], m[std::size_t(a * 4 + 2)]};
+    const float al = std::sqrt(dot(axis, axis));
+    if (!(al > 0.0f)) continue;
+    for (float& v : axis) v /= al;
+    const float score = dot(cross(axis, bone), b.front) / bl;  // the child's speed to the front per radian
+    if (std::fabs(score) > best_score) {
+      best_score = std::fabs(score);
+      best = {a, score > 0.0f ? 1 : -1};
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 std::vector<JointLimit> JointLimitTable::limits_for(const Skeleton& s, std::vector<std::string>* matched) const {
   constexpr float r = std::numbers::pi_v<float> / 180.0f;
   std::vector<JointLimit> out(static_cast<std::size_t>(s.num_joints()));
   if (matched) matched->assign(out.size(), "");
+  std::optional<BindFront> bind;  // for flexion ranges, read once
   for (std::int32_t j = 0; j < s.num_joints(); ++j) {
     if (s.parents[j] < 0) {
       if (matched) (*matched)[j] = "(root: rest)";
@@ -172,7 +227,8 @@ std::vector<JointLimit> JointLimitTable::limits_for(const Skeleton& s, std::vect
       out[j].hi[a] = l->hi[a] * r;
     }
     if (flex && flex->enabled) {
-      const FlexionAxis f = flexion_axis(s, j);
+      if (!bind) bind = bind_front(s);
+      const FlexionAxis f = flexion_axis(s, *bind, j);
       if (f.axis >= 0) {
         const auto a = std::size_t(f.axis);
         out[j].lo[a] = (f.sign > 0 ? flex->lo : -flex->hi) * r;
@@ -189,42 +245,9 @@ std::vector<JointLimit> JointLimitTable::limits_for(const Skeleton& s, std::vect
 
 FlexionAxis flexion_axis(const Skeleton& s, std::int32_t j, Vec3* front_out) {
   GATCORE_CHECK(j >= 0 && j < s.num_joints(), "flexion_axis: joint ", j, " of ", s.num_joints());
-  const std::vector<Mat4> g = global_transforms(s, bind_pose(s));
-  // The front: where the feet point (each foot* joint's bone: to its toe, or
-  // for a foot without toes along the rig's bone axis), summed.
-  const BoneAxis conv = bone_axis_convention(s);
-  Vec3 front{0.0f, 0.0f, 0.0f};
-  for (std::int32_t f = 0; f < s.num_joints(); ++f) {
-    if (normalise_bone_name(s.names[std::size_t(f)]).rfind("foot", 0) != 0) continue;
-    const Vec3 d = bone_direction(s, f, conv);
-    for (int k = 0; k < 3; ++k) front[std::size_t(k)] += d[std::size_t(k)];
-  }
-  const float fl = std::sqrt(dot(front, front));
-  if (!(fl > 1e-3f)) return {};
-  for (float& v : front) v /= fl;
-  if (front_out) *front_out = front;
-  std::int32_t child = -1;
-  for (std::int32_t c = 0; c < s.num_joints() && child < 0; ++c)
-    if (s.parents[std::size_t(c)] == j) child = c;
-  if (child < 0) return {};
-  const Vec3 bone = sub(mat4_translation(g[std::size_t(child)]), mat4_translation(g[std::size_t(j)]));
-  const float bl = std::sqrt(dot(bone, bone));
-  if (!(bl > 0.0f)) return {};
-  FlexionAxis best;
-  float best_score = 0.5f;  // per radian, in bone lengths: below that the axis mostly swings the child sideways
-  for (int a : {0, 2}) {
-    const Mat4& m = g[std::size_t(j)];
-    Vec3 axis{m[std::size_t(a * 4)], m[std::size_t(a * 4 + 1)], m[std::size_t(a * 4 + 2)]};
-    const float al = std::sqrt(dot(axis, axis));
-    if (!(al > 0.0f)) continue;
-    for (float& v : axis) v /= al;
-    const float score = dot(cross(axis, bone), front) / bl;  // the child's speed to the front per radian
-    if (std::fabs(score) > best_score) {
-      best_score = std::fabs(score);
-      best = {a, score > 0.0f ? 1 : -1};
-    }
-  }
-  return best;
+  const BindFront b = bind_front(s);
+  if (front_out && dot(b.front, b.front) > 0.0f) *front_out = b.front;
+  return flexion_axis(s, b, j);
 }
 
 JointLimitTable parse_joint_limits(const std::string& text, const std::string& source) {
