@@ -154,3 +154,55 @@ TEST_CASE("limit_weights keeps the largest influences above min_weight, renormal
   CHECK_THROWS_AS(limit_weights(w, 0, 0.0f), gatcore::InvalidArgument);
   CHECK_THROWS_AS(limit_weights(w, 4, 1.0f), gatcore::InvalidArgument);
 }
+
+namespace {
+
+// Adds joint `name` under `parent` at the bind-space point `at` (no rotation).
+void add_joint(Skeleton& s, const std::string& name, std::int32_t parent, const Vec3& at) {
+  const Vec3 ph = parent >= 0 ? mat4_translation(inverse(s.inverse_bind[parent])) : Vec3{0.0f, 0.0f, 0.0f};
+  Transform local;
+  local.translation = {at[0] - ph[0], at[1] - ph[1], at[2] - ph[2]};
+  s.names.push_back(name);
+  s.parents.push_back(parent);
+  s.rest_local.push_back(local);
+  s.root_parent.push_back(mat4_identity());
+  Transform global;
+  global.translation = at;
+  s.inverse_bind.push_back(inverse(to_matrix(global)));
+}
+
+}  // namespace
+
+TEST_CASE("bone heat gives a control joint far outside the mesh no weight, and keeps a joint at the skin",
+          "[bone_heat]") {
+  // The tube's diagonal is about 2.1, so a joint more than 0.1 outside it is
+  // a control: an IK pole target in front of the "knee" at y = 1.
+  const Character plain = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  const SkinWeights base = bone_heat_weights(plain);
+  Character pole = plain;
+  add_joint(pole.skeleton, "PoleTarget", 0, {0.0f, 1.0f, 1.5f});
+  const SkinWeights wp = bone_heat_weights(pole);
+  check_partition(wp, pole.mesh.num_vertices(), 3);
+  for (std::int32_t j : wp.joint) REQUIRE(j != 2);
+  CHECK(wp.joint == base.joint);  // as if the control were not there
+  CHECK(wp.weight == base.weight);
+
+  // A leaf joint 0.05 outside the side (a foot joint at the sole, a hip
+  // under a skirt) is a bone: it takes the skin next to it.
+  Character sole = plain;
+  add_joint(sole.skeleton, "Nub", 1, {0.3f, 1.5f, 0.0f});
+  const SkinWeights ws = bone_heat_weights(sole);
+  check_partition(ws, sole.mesh.num_vertices(), 3);
+  float most = 0.0f;
+  for (std::int64_t v = 0; v < sole.mesh.num_vertices(); ++v) most = std::max(most, weight_of(ws, v, 2));
+  INFO("largest weight on the joint at the skin: " << most);
+  CHECK(most > 0.5f);
+
+  // A joint inside the mesh is a bone wherever its segment goes.
+  Character inner = plain;
+  add_joint(inner.skeleton, "Inner", 1, {0.0f, 1.8f, 0.0f});
+  const SkinWeights wi = bone_heat_weights(inner);
+  float inner_most = 0.0f;
+  for (std::int64_t v = 0; v < inner.mesh.num_vertices(); ++v) inner_most = std::max(inner_most, weight_of(wi, v, 2));
+  CHECK(inner_most > 0.5f);
+}

@@ -298,23 +298,56 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
         }
       return true;
     };
+    // Any other joint whose own point lies outside the mesh and farther from
+    // it than kControlGap of the character's size is a control too: an IK
+    // pole target in front of the knee, a "Body" hub floating above the
+    // back. Left in, it is the nearest *visible* bone of vertices that cannot
+    // see their own (a head whose joint sits inside a rigid mech's neck
+    // piece) and takes them, where artists give it no weight. Deforming
+    // joints lie inside the skin or on it (a foot joint at the sole, a hip
+    // under a skirt): on the shared rigs those are at most 0.04 of the
+    // diagonal from the nearest vertex, the controls 0.06 or more.
+    constexpr double kControlGap = 0.05;
+    auto far_outside = [&](const V3& x) {
+      if (enclosed(x)) return false;
+      double d2 = 1e300;
+      for (const V3& q : pos) d2 = std::min(d2, dot(sub(q, x), sub(q, x)));
+      return std::sqrt(d2) > kControlGap * diag;
+    };
+    std::int32_t non_root_controls = 0;
     for (std::int32_t j = 0; j < nj; ++j) {
-      if (sk.parents[j] >= 0 || tris.empty()) continue;
+      if (tris.empty()) continue;
+      if (sk.parents[j] >= 0 && (segs[j].empty() || !far_outside(to_v3(segs[j].front().a)))) continue;
       int in = 0, all = 0;
       for (const auto& sg : segs[j]) {
         const V3 a = to_v3(sg.a), b = to_v3(sg.b);
         for (double t = 0.1; t < 1; t += 0.2, ++all)
           in += enclosed({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])});
       }
-      if (2 * in < all) deforming[j] = 0;
+      if (2 * in < all) deforming[j] = 0, non_root_controls += sk.parents[j] >= 0;
     }
+    // Most joints outside their mesh means a skeleton that does not fit it
+    // (bind matrices offset from the mesh), not a rig of controls: then
+    // only the roots' rule holds.
+    if (2 * non_root_controls > nj)
+      for (std::int32_t j = 0; j < nj; ++j) deforming[j] = deforming[j] || sk.parents[j] >= 0;
     std::int32_t kept = 0;
     for (auto x : deforming) kept += x;
     if (kept == 0) std::fill(deforming.begin(), deforming.end(), 1);  // only controls: use them
   }
+  // A segment that ends at a control (a root's segment to a pole target
+  // hanging off it) is not a bone either; a joint left with none keeps its
+  // point.
+  std::vector<Vec3> control_heads;
+  for (std::int32_t j = 0; j < nj; ++j)
+    if (!deforming[j] && !segs[j].empty()) control_heads.push_back(segs[j].front().a);
   for (std::int32_t j = 0; j < nj; ++j) {
     if (!deforming[j]) continue;
-    for (const auto& s : segs[j]) bones.push_back({to_v3(s.a), to_v3(s.b), j});
+    const std::size_t before = bones.size();
+    for (const auto& s : segs[j])
+      if (std::find(control_heads.begin(), control_heads.end(), s.b) == control_heads.end())
+        bones.push_back({to_v3(s.a), to_v3(s.b), j});
+    if (bones.size() == before && !segs[j].empty()) bones.push_back({to_v3(segs[j].front().a), to_v3(segs[j].front().a), j});
   }
   GATCORE_CHECK(!bones.empty(), ch.name, ": bone heat: no joint deforms");
 

@@ -16,6 +16,14 @@
 // bind matrices, so the mesh must be in the bind frame the skin uses (both the
 // loaded and the world-frame prepared character are).
 //
+// Controls (joints that are not bones; used when `deforming` is empty): a
+// root whose segments lie mostly outside the mesh (a root at the floor), and
+// any joint whose own point is outside the mesh and farther than 5 % of the
+// character's diagonal from its nearest vertex, with its segments mostly
+// outside (an IK pole target, a "Body" hub above the back) -- unless such
+// joints are most of the skeleton, which means the skeleton does not fit the
+// mesh. A segment ending at a control is dropped too.
+//
 // Robustness for dressed, multi-mesh, non-manifold characters: vertices at the
 // same position are welded for the diffusion (cracks between mesh pieces do not
 // block heat), cotangents are clamped to [0, 1e3] (obtuse and degenerate
