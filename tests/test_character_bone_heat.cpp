@@ -206,3 +206,22 @@ TEST_CASE("bone heat gives a control joint far outside the mesh no weight, and k
   for (std::int64_t v = 0; v < inner.mesh.num_vertices(); ++v) inner_most = std::max(inner_most, weight_of(wi, v, 2));
   CHECK(inner_most > 0.5f);
 }
+
+TEST_CASE("a leaf bone ends at a joint outside its chain on its axis (an IK foot off the root)", "[bone_heat]") {
+  // root at y = 0, bone1 at y = 1 (a leaf: its segment would end at y = 1.5),
+  // and an IK target hanging off the root at y = 1.9, on bone1's axis: bone1
+  // runs to it, and the segments of the others are unchanged.
+  Character ch = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  const auto before = bone_segments(ch.skeleton);
+  REQUIRE(before[1].size() == 1);
+  CHECK(before[1][0].b[1] == Approx(1.5f));
+  add_joint(ch.skeleton, "FootIK", 0, {0.0f, 1.9f, 0.0f});
+  const auto after = bone_segments(ch.skeleton);
+  REQUIRE(after[1].size() == 1);
+  CHECK(after[1][0].b[1] == Approx(1.9f));
+  // Off the axis (more than ~26 degrees) or beyond 1.5 parent lengths: no tail.
+  Character off = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  add_joint(off.skeleton, "Side", 0, {0.5f, 1.6f, 0.0f});
+  add_joint(off.skeleton, "Far", 0, {0.0f, 2.6f, 0.0f});
+  CHECK(bone_segments(off.skeleton)[1][0].b[1] == Approx(1.5f));
+}

@@ -196,10 +196,28 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
     if (!children[j].empty()) continue;
     Vec3 tail = head[j];
     if (p >= 0) {
-      const double len = leaf_extension * norm(sub(to_v3(head[j]), to_v3(head[p])));
+      const double plen = norm(sub(to_v3(head[j]), to_v3(head[p])));
       const Vec3 b = bone_direction(s, j, conv);
       const V3 d{b[0], b[1], b[2]};
-      for (int c = 0; c < 3; ++c) tail[c] += static_cast<float>(len * d[c]);
+      // glTF keeps no bone tails. Where a joint outside this chain sits on
+      // the leaf's own axis within 1.5 parent lengths, it marks the tail: an
+      // IK foot target hanging off the root where the shin ends.
+      std::int32_t at = -1;
+      double at_len = 1.5 * plen;
+      std::vector<std::uint8_t> chain(static_cast<std::size_t>(nj), 0);
+      for (std::int32_t a = j; a >= 0; a = s.parents[a]) chain[a] = 1;
+      for (std::int32_t k = 0; k < nj; ++k) {
+        if (chain[k]) continue;
+        const V3 v = sub(to_v3(head[k]), to_v3(head[j]));
+        const double l = norm(v);
+        if (l > 0 && l <= at_len && dot(v, d) >= 0.9 * l) at = k, at_len = l;
+      }
+      if (at >= 0) {
+        tail = head[at];
+      } else {
+        const double len = leaf_extension * plen;
+        for (int c = 0; c < 3; ++c) tail[c] += static_cast<float>(len * d[c]);
+      }
     }
     seg[j].push_back({head[j], tail});
   }

@@ -11,8 +11,11 @@
 // LDLT factorisation per character, one solve per joint.
 //
 // Bones: joint j deforms the segments from its bind position to each child's;
-// a leaf joint the segment continuing its parent's direction for half the
-// parent's length (a lone joint: its point). Positions come from the inverse
+// a leaf joint the segment along its own bone axis (the rig's convention,
+// rig/bone_axis.hpp) for half the parent's length -- or, where a joint
+// outside its chain sits on that axis within 1.5 parent lengths, up to that
+// joint: glTF keeps no bone tails, and an IK foot target hanging off the root
+// where the shin ends marks the shin's (a lone joint: its point). Positions come from the inverse
 // bind matrices, so the mesh must be in the bind frame the skin uses (both the
 // loaded and the world-frame prepared character are).
 //
