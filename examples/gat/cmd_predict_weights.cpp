@@ -35,6 +35,20 @@ struct PredictArgs {
   CommonOptions common;
 };
 
+// Joints the written weights never name: said, never silent, since a limb
+// on such a joint stays in the bind pose when the rig animates it.
+void print_weightless_joints(const Character& ch, const SkinWeights& w, const char* why) {
+  std::vector<std::uint8_t> used(static_cast<std::size_t>(ch.skeleton.num_joints()), 0);
+  for (std::int32_t j : w.joint) used[static_cast<std::size_t>(j)] = 1;
+  std::string names;
+  int count = 0;
+  for (std::int32_t j = 0; j < ch.skeleton.num_joints(); ++j)
+    if (!used[static_cast<std::size_t>(j)] && count++ < 8) names += (names.empty() ? "" : ", ") + ch.skeleton.names[j];
+  if (count > 0)
+    std::printf("  %d of %d joints get no weight (%s): %s%s\n", count, ch.skeleton.num_joints(), why, names.c_str(),
+                count > 8 ? ", ..." : "");
+}
+
 int run(const PredictArgs& a) {
   const bool heat = a.method == "bone-heat";
   const std::size_t want = heat ? 1 : 2;
@@ -80,6 +94,7 @@ int run(const PredictArgs& a) {
     std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld, min weight %.3g); %.1f ms -> %s\n",
                 double(w.joint.size()) / double(std::max<std::int64_t>(1, w.num_vertices())),
                 static_cast<long long>(w.max_influences()), k, double(bp.min_weight), ms, out.c_str());
+    print_weightless_joints(ch, w, "controls outside the mesh, or no vertex's nearest bone");
     return 0;
   }
   const Device dev = device_from_flag(a.common.device, "predict-weights");
@@ -109,6 +124,7 @@ int run(const PredictArgs& a) {
                 static_cast<long long>(p.weights.max_influences()), k);
     std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
                 out.c_str());
+    print_weightless_joints(ch, p.weights, "no vertex's candidate, or scored below the kept influences");
     return 0;
   }
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::weights);
