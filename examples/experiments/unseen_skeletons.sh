@@ -33,7 +33,9 @@
 # they are not run here (see neuroskinning.sh for them on shared skeletons).
 # modular_women/Adventurer.glb is skipped: its leg weights are NaN.
 # Output: DIR (default build/experiments/unseen_skeletons): datasets,
-# checkpoints, logs, per-method JSON and DIR/report.md. Needs python3.
+# checkpoints, logs, per-method JSON and DIR/report.md (every method per
+# character, then issue #15's check per test character: skinweights-any's
+# L1 below bone heat's, its dominant bone >= 85 %, and the counts). Needs python3.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -138,5 +140,26 @@ for fold in folds:
         for c in j["characters"] + [dict(j["overall"], name="**overall**")]:
             print(f"| {fold} | {c['name']} | {m} | {c['precision']:.3f} | {c['recall']:.3f} | {c['l1_mean']:.4f} | "
                   f"{c['l1_max']:.4f} | {c['dominant']:.3f} | {c['deform_mean']:.5f} | {c['deform_max']:.4f} |")
+# Issue #15's bar per test character: skinweights-any's L1 below bone heat's,
+# its dominant bone at least 85 %.
+print()
+print("| fold | character | bone heat L1 / dominant | skinweights-any L1 / dominant | L1 below bone heat | dominant >= 0.85 |")
+print("|---|---|---:|---:|---|---|")
+below = high = total = 0
+for fold in folds:
+    paths = [os.path.join(out, fold, m + ".json") for m in ("bone-heat", "skinweights-any")]
+    if not all(os.path.exists(p) for p in paths):
+        continue
+    heat, model = ({c["name"]: c for c in json.load(open(p))["characters"]} for p in paths)
+    for name, c in model.items():
+        if name not in heat:
+            continue
+        h = heat[name]
+        lower, enough = c["l1_mean"] < h["l1_mean"], c["dominant"] >= 0.85
+        below, high, total = below + lower, high + enough, total + 1
+        print(f"| {fold} | {name} | {h['l1_mean']:.4f} / {h['dominant']:.3f} | {c['l1_mean']:.4f} / {c['dominant']:.3f} | "
+              f"{'yes' if lower else '**no**'} | {'yes' if enough else '**no**'} |")
+if total:
+    print(f"\nskinweights-any: L1 below bone heat on {below} of {total} test characters, dominant bone >= 85 % on {high} of {total}.")
 PY
 log "report: $out/report.md"
