@@ -225,3 +225,24 @@ TEST_CASE("a leaf bone ends at a joint outside its chain on its axis (an IK foot
   add_joint(off.skeleton, "Far", 0, {0.0f, 2.6f, 0.0f});
   CHECK(bone_segments(off.skeleton)[1][0].b[1] == Approx(1.5f));
 }
+
+TEST_CASE("bone heat's joint overrides: the user's word over the control rules", "[bone_heat]") {
+  Character ch = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  const SkinWeights base = bone_heat_weights(ch);
+  add_joint(ch.skeleton, "PoleTarget", 0, {0.0f, 1.0f, 1.5f});
+  BoneHeatParams p;
+  p.joint_override = {0, -1, 0};  // bone1 is a control: everything goes to the root
+  const SkinWeights only_root = bone_heat_weights(ch, p);
+  check_partition(only_root, ch.mesh.num_vertices(), 3);
+  for (std::int32_t j : only_root.joint) CHECK(j == 0);
+  p.joint_override = {0, 0, 1};  // the pole target is a bone again: the root's segment to it is back
+  const SkinWeights with_pole = bone_heat_weights(ch, p);
+  check_partition(with_pole, ch.mesh.num_vertices(), 3);
+  CHECK(with_pole.weight != base.weight);
+  p.joint_override = {0, 0, 0};  // no override: as decided by the rules
+  CHECK(bone_heat_weights(ch, p).weight == base.weight);
+  p.joint_override = {1, 1};
+  CHECK_THROWS_AS(bone_heat_weights(ch, p), gatcore::InvalidArgument);
+  p.joint_override = {-1, -1, -1};
+  CHECK_THROWS_AS(bone_heat_weights(ch, p), gatcore::InvalidArgument);  // no joint deforms
+}

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <tuple>
 
 #include <omp.h>
 
@@ -32,6 +33,7 @@ struct PredictArgs {
   long k = 4;
   double min_weight = -1;  // < 0: the method's default
   std::vector<std::string> aliases;
+  std::vector<std::string> bones, controls;  // bone heat: joints forced to be bones / controls
   CommonOptions common;
 };
 
@@ -78,6 +80,17 @@ int run(const PredictArgs& a) {
     stage("reading the character");
     const Character ch = load_gltf(in);
     BoneHeatParams bp;
+    if (!a.bones.empty() || !a.controls.empty()) {
+      bp.joint_override.assign(static_cast<std::size_t>(ch.skeleton.num_joints()), 0);
+      for (const auto& [names, value, flag] : {std::tuple{&a.bones, 1, "--bone"}, std::tuple{&a.controls, -1, "--control"}})
+        for (const std::string& name : *names) {
+          const std::int32_t j = ch.skeleton.find(name);
+          GATCORE_CHECK(j >= 0, in, ": ", flag, " ", name, ": the character has no joint of that name");
+          GATCORE_CHECK(bp.joint_override[static_cast<std::size_t>(j)] == 0, in, ": joint ", name,
+                        " is given both --bone and --control");
+          bp.joint_override[static_cast<std::size_t>(j)] = static_cast<std::int8_t>(value);
+        }
+    }
     bp.max_influences = int(k);
     bp.min_weight = min_weight < 0 ? 0.01f : float(min_weight);
     Activity doing("computing the bone-heat weights of " + in);
@@ -97,6 +110,8 @@ int run(const PredictArgs& a) {
     print_weightless_joints(ch, w, "controls outside the mesh, or no vertex's nearest bone");
     return 0;
   }
+  GATCORE_CHECK(a.bones.empty() && a.controls.empty(),
+                "--bone and --control only apply to --method bone-heat (a model scores every joint itself)");
   const Device dev = device_from_flag(a.common.device, "predict-weights");
   Activity reading("reading the checkpoint " + model_path);
   stage("reading the checkpoint");
@@ -188,6 +203,11 @@ Runner setup_predict_weights(CLI::App& gat) {
                "JOINTS_1/WEIGHTS_1, ...)")
       ->check(int_in(1, 64))->capture_default_str();
   add_repeatable(c, "--alias", a->aliases, "JOINT=BONE: treat the character's joint JOINT as the model's bone BONE");
+  add_repeatable(c, "--bone", a->bones,
+                 "JOINT: with --method bone-heat, JOINT is a bone even where it looks like a control (a joint "
+                 "outside the mesh)");
+  add_repeatable(c, "--control", a->controls,
+                 "JOINT: with --method bone-heat, JOINT gets no weight (an IK target, a helper the rules keep)");
   add_device(c, a->common);
   add_threads(c, a->common);
   add_quiet(c, a->common);

@@ -235,6 +235,9 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
                 params.heat);
   GATCORE_CHECK(params.deforming.empty() || static_cast<std::int32_t>(params.deforming.size()) == nj, ch.name,
                 ": bone heat deforming mask has ", params.deforming.size(), " entries for ", nj, " joints");
+  GATCORE_CHECK(params.joint_override.empty() || static_cast<std::int32_t>(params.joint_override.size()) == nj,
+                ch.name, ": bone heat joint overrides have ", params.joint_override.size(), " entries for ", nj,
+                " joints");
   for (float x : mesh.positions) GATCORE_CHECK(std::isfinite(x), ch.name, ": a vertex position is not finite");
   for (std::int32_t t : mesh.triangles)
     GATCORE_CHECK(t >= 0 && t < n, ch.name, ": triangle vertex ", t, " out of range (", n, " vertices)");
@@ -353,6 +356,8 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
     for (auto x : deforming) kept += x;
     if (kept == 0) std::fill(deforming.begin(), deforming.end(), 1);  // only controls: use them
   }
+  for (std::size_t j = 0; j < params.joint_override.size(); ++j)
+    if (params.joint_override[j] != 0) deforming[j] = params.joint_override[j] > 0;
   // A segment that ends at a control (a root's segment to a pole target
   // hanging off it) is not a bone either; a joint left with none keeps its
   // point.

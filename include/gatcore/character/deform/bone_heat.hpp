@@ -54,8 +54,13 @@ struct BoneHeatParams {
   // of the parent's length (0: the joint's point; a vertex past its parent's
   // tail then goes to it).
   float leaf_extension = 0.5f;
-  // Joints that may receive weight ([num_joints], 1 = deforms); empty = all.
+  // Joints that may receive weight ([num_joints], 1 = deforms); empty = the
+  // rules above (every joint but the controls).
   std::vector<std::uint8_t> deforming;
+  // Per joint, applied last ([num_joints] or empty): +1 always a bone, -1
+  // never (a control), 0 as decided above -- the user's word where the
+  // control rules get a rig wrong (gat predict-weights --bone / --control).
+  std::vector<std::int8_t> joint_override;
 };
 
 // Per-vertex weights over the character's joints (each vertex: 1..max_influences
