@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
-#include <tuple>
 
 #include <omp.h>
 
@@ -80,16 +79,19 @@ int run(const PredictArgs& a) {
     stage("reading the character");
     const Character ch = load_gltf(in);
     BoneHeatParams bp;
+    const auto mark = [&](const std::vector<std::string>& names, std::int8_t value, const char* flag) {
+      for (const std::string& name : names) {
+        const std::int32_t j = ch.skeleton.find(name);
+        GATCORE_CHECK(j >= 0, in, ": ", flag, " ", name, ": the character has no joint of that name");
+        GATCORE_CHECK(bp.joint_override[static_cast<std::size_t>(j)] == 0, in, ": joint ", name,
+                      " is given both --bone and --control");
+        bp.joint_override[static_cast<std::size_t>(j)] = value;
+      }
+    };
     if (!a.bones.empty() || !a.controls.empty()) {
       bp.joint_override.assign(static_cast<std::size_t>(ch.skeleton.num_joints()), 0);
-      for (const auto& [names, value, flag] : {std::tuple{&a.bones, 1, "--bone"}, std::tuple{&a.controls, -1, "--control"}})
-        for (const std::string& name : *names) {
-          const std::int32_t j = ch.skeleton.find(name);
-          GATCORE_CHECK(j >= 0, in, ": ", flag, " ", name, ": the character has no joint of that name");
-          GATCORE_CHECK(bp.joint_override[static_cast<std::size_t>(j)] == 0, in, ": joint ", name,
-                        " is given both --bone and --control");
-          bp.joint_override[static_cast<std::size_t>(j)] = static_cast<std::int8_t>(value);
-        }
+      mark(a.bones, 1, "--bone");
+      mark(a.controls, -1, "--control");
     }
     bp.max_influences = int(k);
     bp.min_weight = min_weight < 0 ? 0.01f : float(min_weight);

@@ -180,7 +180,9 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
   // (rig/bone_axis.hpp): a foot without toe joints points forward, not down
   // its shin.
   const BoneAxis conv = bone_axis_convention(s);
+  // Every joint gets at least one segment (its best branch, or its leaf bone).
   std::vector<std::vector<BoneSegment>> seg(static_cast<std::size_t>(nj));
+  std::vector<std::uint8_t> chain(static_cast<std::size_t>(nj));  // a leaf's ancestors
   for (std::int32_t j = 0; j < nj; ++j) {
     const std::int32_t p = s.parents[j];
     // Branches (a child turning away from the parent's direction, like the
@@ -204,7 +206,7 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
       // IK foot target hanging off the root where the shin ends.
       std::int32_t at = -1;
       double at_len = 1.5 * plen;
-      std::vector<std::uint8_t> chain(static_cast<std::size_t>(nj), 0);
+      std::fill(chain.begin(), chain.end(), 0);
       for (std::int32_t a = j; a >= 0; a = s.parents[a]) chain[a] = 1;
       for (std::int32_t k = 0; k < nj; ++k) {
         if (chain[k]) continue;
@@ -336,9 +338,8 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
       return std::sqrt(d2) > kControlGap * diag;
     };
     std::int32_t non_root_controls = 0;
-    for (std::int32_t j = 0; j < nj; ++j) {
-      if (tris.empty()) continue;
-      if (sk.parents[j] >= 0 && (segs[j].empty() || !far_outside(to_v3(segs[j].front().a)))) continue;
+    for (std::int32_t j = 0; j < nj && !tris.empty(); ++j) {
+      if (sk.parents[j] >= 0 && !far_outside(to_v3(segs[j].front().a))) continue;
       int in = 0, all = 0;
       for (const auto& sg : segs[j]) {
         const V3 a = to_v3(sg.a), b = to_v3(sg.b);
@@ -363,14 +364,14 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   // point.
   std::vector<Vec3> control_heads;
   for (std::int32_t j = 0; j < nj; ++j)
-    if (!deforming[j] && !segs[j].empty()) control_heads.push_back(segs[j].front().a);
+    if (!deforming[j]) control_heads.push_back(segs[j].front().a);
   for (std::int32_t j = 0; j < nj; ++j) {
     if (!deforming[j]) continue;
     const std::size_t before = bones.size();
     for (const auto& s : segs[j])
       if (std::find(control_heads.begin(), control_heads.end(), s.b) == control_heads.end())
         bones.push_back({to_v3(s.a), to_v3(s.b), j});
-    if (bones.size() == before && !segs[j].empty()) bones.push_back({to_v3(segs[j].front().a), to_v3(segs[j].front().a), j});
+    if (bones.size() == before) bones.push_back({to_v3(segs[j].front().a), to_v3(segs[j].front().a), j});
   }
   GATCORE_CHECK(!bones.empty(), ch.name, ": bone heat: no joint deforms");
 
