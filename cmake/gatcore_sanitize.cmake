@@ -45,14 +45,9 @@ endfunction()
 # and the two builds of CI are compile-bound on 2 cores); in optimised
 # builds the tests build at -O1 (7 s instead of 11 s at -O3). The CLI and
 # examples keep the build type's flags outside the sanitizer build: users
-# run them. Kind "reference": a test whose own reference loops (GEMM in
-# double on large shapes) are most of its run time keeps the build type's
-# flags everywhere (at -O0 under ASan test_kernels_nn took 58 s instead of
-# 28 s, test_vulkan_large 87 s instead of 62 s).
+# run them.
 function(gatcore_driver_flags target kind)
-  if(kind STREQUAL "reference")
-    return()
-  elseif(GATCORE_SANITIZE)
+  if(GATCORE_SANITIZE)
     target_compile_options(${target} PRIVATE -O0)
   elseif(kind STREQUAL "test")
     target_compile_options(${target} PRIVATE $<$<CONFIG:Release,RelWithDebInfo,MinSizeRel>:-O1>)

@@ -76,16 +76,14 @@ log() { printf '[%s] %s\n' "$(date -u +%H:%M:%S)" "$*"; }
 # whichever has the lower mean L1 on the fold's validation characters (a tie
 # keeps the last epoch), and logs both figures.
 pick_by_validation() {
-  local d="$1" m="$2" c l1 best="" best_l1="" line=""
+  local d="$1" m="$2" c stem l1 best="" best_l1="" line=""
   for c in "$d/$m.gcm" "$d/$m.best.gcm"; do
-    "$gat" eval --model "$c" --part validation --poses 1 --seed "$seed" --json "$d/$(basename "$c" .gcm).validation.json" \
-      >"$d/$(basename "$c" .gcm).validation.log" 2>&1 \
-      || { cat "$d/$(basename "$c" .gcm).validation.log" >&2; die "validation eval of $c failed"; }
-    l1="$(python3 -c 'import json,sys; print("%.4f" % json.load(open(sys.argv[1]))["overall"]["l1_mean"])' \
-            "$d/$(basename "$c" .gcm).validation.json")"
+    stem="$d/$(basename "$c" .gcm).validation"
+    "$gat" eval --model "$c" --part validation --poses 1 --seed "$seed" --json "$stem.json" >"$stem.log" 2>&1 \
+      || { cat "$stem.log" >&2; die "validation eval of $c failed"; }
+    l1="$(python3 -c 'import json,sys; print("%.4f" % json.load(open(sys.argv[1]))["overall"]["l1_mean"])' "$stem.json")"
     line="${line:+$line, }$(basename "$c") $l1"
-    if [ -z "$best" ] || python3 -c 'import sys; sys.exit(0 if float(sys.argv[1]) < float(sys.argv[2]) else 1)' "$l1" "$best_l1"
-    then best="$c" best_l1="$l1"; fi
+    if [ -z "$best" ] || awk -v a="$l1" -v b="$best_l1" 'BEGIN { exit !(a < b) }'; then best="$c" best_l1="$l1"; fi
   done
   log "$(basename "$d"): $m validation L1: $line -> $(basename "$best")" >&2
   echo "$best"
