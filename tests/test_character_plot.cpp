@@ -85,7 +85,7 @@ TEST_CASE("the loss curve and history files gat train writes", "[character][plot
   std::ifstream f(history_csv_path(png));
   std::string line;
   std::getline(f, line);
-  CHECK(line == "epoch,train_loss,val_loss,lr,seconds");
+  CHECK(line == "epoch,train_loss,val_loss,lr,seconds,val_l1");
   int rows = 0;
   while (std::getline(f, line)) ++rows;
   CHECK(rows == 30);
@@ -99,7 +99,18 @@ TEST_CASE("the loss curve and history files gat train writes", "[character][plot
   CHECK(back[4].epoch == 5);
   CHECK(back[4].train == Approx(h[4].train).epsilon(1e-8));
   CHECK(back[4].val == Approx(h[4].val).epsilon(1e-8));
+  CHECK(back[4].val_l1 < 0);  // not measured: five fields, as older checkpoints hold
   CHECK_THROWS_WITH(parse_history("1:0.5:x", "m.gcm"), Contains("m.gcm") && Contains("'1:0.5:x'"));
+  // Skin-weight runs add the validation L1 as a sixth field; both forms read.
+  std::vector<LossRecord> w = {{1, 0.9, 0.8, 1e-3, 2.0, 0.45}, {2, 0.7, 0.75, 1e-3, 2.0, -1}};
+  const std::vector<LossRecord> wb = parse_history(format_history(w), "w.gcm");
+  REQUIRE(wb.size() == 2);
+  CHECK(wb[0].val_l1 == Approx(0.45).epsilon(1e-8));
+  CHECK(wb[1].val_l1 < 0);
+  CHECK(parse_history("3:0.5:0.4:0.001:1.5", "old.gcm")[0].val_l1 < 0);
+  CHECK_THROWS_WITH(parse_history("3:0.5:0.4:0.001:1.5:", "m.gcm"), Contains("malformed"));
+  CHECK_THROWS_WITH(parse_history("3:0.5:0.4:0.001:1.5:0.2:7", "m.gcm"), Contains("malformed"));
+  CHECK_THROWS_WITH(parse_history("3:0.5:0.4:0.001:1.5x", "m.gcm"), Contains("malformed"));
   CHECK_THROWS_WITH(write_loss_outputs(h, tmp("no_dir/c.png")), Contains("c.csv"));
 }
 

@@ -211,3 +211,50 @@ TEST_CASE("Normaliser: z-scores, and a column constant in training stays at its 
   CHECK(y.at(0, 1) == 0.f);  // held at the training value, whatever the new character puts there
   CHECK(y.at(0, 2) == 0.f);
 }
+
+TEST_CASE("validation of a skin-weight model reports the top-4 weights' L1 beside the loss") {
+  // The L1 is what --keep-best-by l1 selects on; it must be the figure a user
+  // computes from predict(..., top_k = 4) against the targets, per sample
+  // averaged over the samples.
+  ModelConfig c = ModelConfig::defaults("neuroskinning", 9, 6);
+  auto m = make_model(c, 5);
+  std::vector<Sample> train = {fixtures::wave_sample(8, 6, 0.f, true, 6)};
+  std::vector<Sample> val = {fixtures::wave_sample(7, 6, 1.f, true, 6), fixtures::wave_sample(9, 5, 0.4f, true, 6)};
+  TrainOptions o = TrainOptions::defaults_for(c);
+  o.sample_vertices = 30;
+  const Normaliser norm = Normaliser::fit(train, false);
+  Trainer t(*m, o, norm);
+  const EpochStats st = t.run_epoch(train, val);
+  double want = 0;
+  for (const Sample& s : val) {
+    const Tensor w = predict(*m, s, norm, kEvaluationInfluences);
+    double sum = 0;
+    for (std::int64_t i = 0; i < w.rows(); ++i) {
+      int nonzero = 0;
+      for (std::int64_t j = 0; j < w.cols(); ++j) {
+        sum += std::abs(double(w.at(i, j)) - double(s.target.at(i, j)));
+        nonzero += w.at(i, j) > 0.f;
+      }
+      CHECK(nonzero <= kEvaluationInfluences);
+    }
+    want += sum / double(w.rows()) / double(val.size());
+  }
+  REQUIRE(st.val_l1 >= 0);
+  CHECK(st.val_l1 == Approx(want).epsilon(1e-5));
+  CHECK(st.val_l1 > 0.05);  // 6 bones, targets spread over more than 4 of them: not 0 by accident
+  const Evaluation e = t.validate(val);
+  CHECK(e.loss == Approx(st.val_loss).epsilon(1e-9));
+  CHECK(e.weight_l1 == Approx(st.val_l1).epsilon(1e-9));
+  CHECK(t.evaluate(val) == e.loss);
+
+  // Displacement models have no L1: -1, and the epoch reports none.
+  ModelConfig d = ModelConfig::defaults("densegats", 9, 3);
+  d.modules = 1;
+  d.blocks = 1;
+  auto md = make_model(d, 3);
+  std::vector<Sample> dtrain = {fixtures::wave_sample(8, 6, 0.f, false)};
+  TrainOptions od = TrainOptions::defaults_for(d);
+  od.sample_vertices = 25;
+  Trainer td(*md, od, Normaliser::fit(dtrain, true));
+  CHECK(td.run_epoch(dtrain, {fixtures::wave_sample(7, 6, 1.f, false)}).val_l1 == -1);
+}

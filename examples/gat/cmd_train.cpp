@@ -48,7 +48,7 @@ void on_sigint(int) {
 
 struct TrainArgs {
   std::string model_name = "densegats", out = "model.gcm", resume, init, data, task, curve, loss, joint_columns, keep_best,
-              sampling, precision, lr_schedule;
+              sampling, precision, lr_schedule, keep_best_by;
   bool lr_set = false;  // --lr given (a resumed run otherwise continues at the checkpoint's rate)
   std::vector<std::string> architecture_flags;  // given flags that --init takes from its checkpoint instead
   long epochs = 10, seed = 0, batch = 0, samples = 64;
@@ -147,8 +147,14 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "per candidate slot")
       ->delimiter(',')->check(int_in(1, 4096));
   c.add_option("--keep-best", a->keep_best,
-               "also write the checkpoint of the epoch with the lowest validation loss so far to this path (--out "
-               "stays the latest epoch, to resume from; a resumed run continues from the loss history's best)");
+               "also write the checkpoint of the epoch with the best validation figure so far (--keep-best-by) to "
+               "this path (--out stays the latest epoch, to resume from; a resumed run continues from the loss "
+               "history's best)");
+  c.add_option("--keep-best-by", a->keep_best_by,
+               "what --keep-best minimises: the validation loss, or (skin-weight models) the validation L1 of the "
+               "top-4 weights, what users judge weights by (the loss, a divergence over the candidate bones, can keep "
+               "falling while the weights get worse). Default: l1 for skin-weight models, loss otherwise")
+      ->check(CLI::IsMember({"loss", "l1"}));
   c.add_option("--sampling", a->sampling,
                "which vertices of a character a training sample takes: random (NeuroSkinning's), consecutive "
                "(a window of vertex ids, DenseGATs'; default of the other models) or full (every vertex: the mesh "
@@ -179,7 +185,8 @@ namespace {
 
 int run_train(TrainArgs a) {
   std::string model_name = a.model_name, out = a.out, resume = a.resume, init = a.init, data = a.data, task = a.task,
-              curve = a.curve, loss = a.loss, joint_columns = a.joint_columns, keep_best = a.keep_best;
+              curve = a.curve, loss = a.loss, joint_columns = a.joint_columns, keep_best = a.keep_best,
+              keep_best_by = a.keep_best_by;
   long epochs = a.epochs, seed = a.seed, batch = a.batch, samples = a.samples < 0 ? 64 : a.samples;
   const bool samples_set = a.samples >= 0;
   const float lr = a.lr;
@@ -495,11 +502,22 @@ int run_train(TrainArgs a) {
     history = gatcore::character::parse_history(loaded.file.metadata.at("loss_history"), resume);
     std::erase_if(history, [&](const LossRecord& r) { return r.epoch > trainer.epoch(); });
   }
-  // --keep-best: the lowest validation loss so far (a resumed run's history included).
+  // --keep-best: the lowest validation loss (or L1) so far, a resumed run's
+  // history included (an older checkpoint's history has no L1: it starts afresh).
+  if (keep_best_by.empty()) keep_best_by = cfg.task == Task::weights ? "l1" : "loss";
+  if (keep_best_by == "l1" && cfg.task != Task::weights) {
+    std::fprintf(stderr, "gat train: --keep-best-by l1 needs a skin-weight model; %s predicts displacements\n",
+                 cfg.name.c_str());
+    return 2;
+  }
+  const bool by_l1 = keep_best_by == "l1";
+  const auto figure = [&](double val, double val_l1) { return by_l1 ? val_l1 : val; };
+  const char* figure_name = by_l1 ? "validation L1" : "validation loss";
   double best_val = -1;
   int best_epoch = 0;
   for (const LossRecord& r : history)
-    if (r.val >= 0 && (best_val < 0 || r.val < best_val)) best_val = r.val, best_epoch = r.epoch;
+    if (const double f = figure(r.val, r.val_l1); f >= 0 && (best_val < 0 || f < best_val))
+      best_val = f, best_epoch = r.epoch;
   if (trainer.epoch() >= epochs) {
     if (root) std::printf("the checkpoint has already trained %d of %ld epochs; nothing to do\n", trainer.epoch(), epochs);
     return 0;
@@ -547,21 +565,25 @@ int run_train(TrainArgs a) {
     const bool last = trainer.epoch() + 1 >= epochs;
     const bool validate = last || (trainer.epoch() + 1) % val_every == 0;
     const EpochStats st = trainer.run_epoch(train, validate ? val : std::vector<Sample>{}, progress);
-    history.push_back({st.epoch, st.train_loss, st.val_loss, double(st.lr), st.seconds});
+    history.push_back({st.epoch, st.train_loss, st.val_loss, double(st.lr), st.seconds, st.val_l1});
     extra["loss_history"] = gatcore::character::format_history(history);
     if (root) {  // every rank holds the same model; one writes it
       save_checkpoint(out, *model, norm, &trainer, extra);
       gatcore::character::write_loss_outputs(history, curve);
     }
-    const bool improved = !keep_best.empty() && st.val_loss >= 0 && (best_val < 0 || st.val_loss < best_val);
+    const double fig = figure(st.val_loss, st.val_l1);
+    const bool improved = !keep_best.empty() && fig >= 0 && (best_val < 0 || fig < best_val);
     if (improved) {
-      best_val = st.val_loss;
+      best_val = fig;
       best_epoch = st.epoch;
       if (root) save_checkpoint(keep_best, *model, norm, &trainer, extra);
     }
     if (tty) std::fprintf(stderr, "\r\033[K");
-    char val_text[32] = "-";
-    if (st.val_loss >= 0) std::snprintf(val_text, sizeof val_text, "%.6f", st.val_loss);
+    char val_text[64] = "-";
+    if (st.val_loss >= 0 && st.val_l1 >= 0)
+      std::snprintf(val_text, sizeof val_text, "%.6f  val L1 %.4f", st.val_loss, st.val_l1);
+    else if (st.val_loss >= 0)
+      std::snprintf(val_text, sizeof val_text, "%.6f", st.val_loss);
     if (root && !quiet)
       std::printf("epoch %d/%ld  train loss %.6f  val loss %s  lr %.3g  %.1f samples/s  (%.1f s)  -> %s%s%s\n", st.epoch,
                 epochs, st.train_loss, val_text, st.lr, double(st.samples) / std::max(st.seconds, 1e-9), st.seconds,
@@ -575,7 +597,7 @@ int run_train(TrainArgs a) {
     int stop[2] = {minutes > 0 && trained_s >= minutes * 60.0 && trainer.epoch() < epochs, int(g_stop)};
     comm.broadcast(stop, sizeof stop, 0);
     if (root && !quiet && !keep_best.empty() && (stop[0] || stop[1] || trainer.epoch() >= epochs))
-      std::printf("best validation loss %.6f at epoch %d, written to %s\n", best_val, best_epoch, keep_best.c_str());
+      std::printf("best %s %.6f at epoch %d, written to %s\n", figure_name, best_val, best_epoch, keep_best.c_str());
     if (stop[0]) {
       if (root) std::printf("time budget of %g minutes reached after epoch %d (%s); model written to %s\n", minutes, st.epoch,
                   gat::hms(trained_s).c_str(), out.c_str());

@@ -348,7 +348,11 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
   }
   st.batches = nb;
   st.train_loss = sum / double(nb);
-  if (!val.empty()) st.val_loss = evaluate(val);
+  if (!val.empty()) {
+    const Evaluation e = validate(val);
+    st.val_loss = e.loss;
+    st.val_l1 = e.weight_l1;
+  }
   const float metric = float(st.val_loss >= 0 ? st.val_loss : st.train_loss);
   if (opt_.schedule == Schedule::plateau) {
     if (st.val_loss >= 0 && !plateau_.on_validation) {
@@ -416,23 +420,40 @@ double Trainer::step(const std::vector<const Sample*>& smp, const std::vector<st
   return l;
 }
 
-double Trainer::evaluate(const std::vector<Sample>& samples) {
+Evaluation Trainer::validate(const std::vector<Sample>& samples) {
   NoGradGuard ng;
-  // Sharded by sample (round robin); every sample's loss lands in its slot
-  // and the slots are summed in sample order, on every rank: the same number
-  // as one process computes.
-  std::vector<double> losses(samples.size(), 0.0);
+  // Sharded by sample (round robin); every sample's figures land in its
+  // slots and the slots are summed in sample order, on every rank: the same
+  // numbers as one process computes.
+  const bool weights = model_.config().task == Task::weights;
+  std::vector<double> losses(samples.size(), 0.0), l1(weights ? samples.size() : 0, 0.0);
   for (std::size_t i = std::size_t(comm_.rank()); i < samples.size(); i += std::size_t(comm_.size())) {
     const Sample& s = samples[i];
     Batch b = make_batch({&s}, {{}}, norm_, model_.pool_sizes());
     to_device(b, model_.device());
-    losses[i] = to(task_loss(model_.config(), model_.forward(b, false), b.target).value(), Device::cpu).at(0, 0);
+    const Var pred = model_.forward(b, false);
+    losses[i] = to(task_loss(model_.config(), pred, b.target).value(), Device::cpu).at(0, 0);
+    if (weights) {
+      const Tensor w = top_k_renormalise(to(pred.value(), Device::cpu), kEvaluationInfluences);
+      const Tensor t = to(b.target, Device::cpu);
+      double sum = 0;
+      for (std::int64_t r = 0; r < w.rows(); ++r)
+        for (std::int64_t c = 0; c < w.cols(); ++c) sum += std::abs(double(w.at(r, c)) - double(t.at(r, c)));
+      l1[i] = w.rows() > 0 ? sum / double(w.rows()) : 0.0;
+    }
     forget_graphs(b, model_.device());
   }
   comm_.sum(losses.data(), losses.size());
-  double sum = 0;
-  for (double l : losses) sum += l;
-  return samples.empty() ? 0.0 : sum / double(samples.size());
+  if (weights) comm_.sum(l1.data(), l1.size());
+  Evaluation e;
+  for (double l : losses) e.loss += l;
+  e.loss = samples.empty() ? 0.0 : e.loss / double(samples.size());
+  if (weights) {
+    e.weight_l1 = 0;
+    for (double v : l1) e.weight_l1 += v;
+    e.weight_l1 = samples.empty() ? 0.0 : e.weight_l1 / double(samples.size());
+  }
+  return e;
 }
 
 Tensor predict(Model& model, const Sample& s, const Normaliser& norm, int top_k) {

@@ -111,6 +111,9 @@ void to_device(Batch& b, Device d);
 struct EpochStats {
   int epoch = 0;
   double train_loss = 0, val_loss = -1;  // val_loss < 0: no validation set
+  // Skin-weight models: validation's mean per-vertex L1 of the top-4
+  // renormalised weights (Evaluation::weight_l1); -1 otherwise.
+  double val_l1 = -1;
   float lr = 0;
   std::int64_t batches = 0, samples = 0;
   double seconds = 0;
@@ -118,6 +121,22 @@ struct EpochStats {
   // during the epoch (0 in one process).
   double comm_bytes = 0, comm_seconds = 0;
 };
+
+// What validation measures. For skin-weight models the loss (KL divergence
+// of the predicted distribution) is not what users judge weights by: late in
+// training it keeps falling while the weights' L1 rises (docs/RESULTS.md,
+// issue #15, "Which checkpoint to evaluate"), so the L1 is measured too.
+struct Evaluation {
+  double loss = 0;
+  // Task::weights: per sample the mean over its vertices of
+  // sum_j |w_j - t_j|, averaged over the samples (as `gat eval`'s overall
+  // row averages its characters), w the prediction kept to its kEvaluationInfluences
+  // largest weights and renormalised (what predict_skin_weights gives by
+  // default), t the sample's target (skinweights-any: its candidates'
+  // weights, renormalised over the candidates). -1 for displacements.
+  double weight_l1 = -1;
+};
+inline constexpr int kEvaluationInfluences = 4;
 
 // Called after every batch: (epoch, batch index, batches in epoch, loss).
 using BatchCallback = std::function<void(int, std::int64_t, std::int64_t, double)>;
@@ -157,7 +176,9 @@ class Trainer {
   EpochStats run_epoch(const std::vector<Sample>& train, const std::vector<Sample>& val = {},
                        const BatchCallback& on_batch = {});
   // Mean loss over full meshes in eval mode.
-  double evaluate(const std::vector<Sample>& samples);
+  double evaluate(const std::vector<Sample>& samples) { return validate(samples).loss; }
+  // The mean loss and, for skin weights, the weights' L1 (Evaluation).
+  Evaluation validate(const std::vector<Sample>& samples);
   // Which of `count` training samples the next run_epoch makes this rank
   // build a batch from (its shares, and the first sample of a batch it has
   // no share of); all of them in one process. The others may be stubs that

@@ -20,6 +20,10 @@ std::string format_history(const std::vector<LossRecord>& h) {
     std::snprintf(b, sizeof b, "%s%d:%.9g:%.9g:%.6g:%.4g", s.empty() ? "" : ";", r.epoch, r.train, r.val, r.lr,
                   r.seconds);
     s += b;
+    if (r.val_l1 >= 0) {
+      std::snprintf(b, sizeof b, ":%.9g", r.val_l1);
+      s += b;
+    }
   }
   return s;
 }
@@ -30,7 +34,11 @@ std::vector<LossRecord> parse_history(const std::string& s, const std::string& w
   for (std::string item; std::getline(ss, item, ';');) {
     LossRecord r;
     char tail = 0;
-    if (std::sscanf(item.c_str(), "%d:%lf:%lf:%lf:%lf%c", &r.epoch, &r.train, &r.val, &r.lr, &r.seconds, &tail) != 5)
+    const int got = std::sscanf(item.c_str(), "%d:%lf:%lf:%lf:%lf:%lf%c", &r.epoch, &r.train, &r.val, &r.lr, &r.seconds,
+                                &r.val_l1, &tail);
+    // Five fields (no L1 measured) end right after the seconds.
+    const bool five = got == 5 && std::sscanf(item.c_str(), "%*d:%*f:%*f:%*f:%*f%c", &tail) != 1;
+    if (got != 6 && !five)
       throw InvalidArgument(what + ": malformed loss history entry '" + item + "'");
     h.push_back(r);
   }
@@ -52,17 +60,19 @@ std::string history_csv_path(const std::string& png) {
 void write_loss_outputs(const std::vector<LossRecord>& h, const std::string& png) {
   const std::string csv = history_csv_path(png);
   {
-    std::string f = "epoch,train_loss,val_loss,lr,seconds\n";
-    char b[160], v[40] = "";
+    std::string f = "epoch,train_loss,val_loss,lr,seconds,val_l1\n";
+    char b[200], v[40] = "", l1[40] = "";
     for (const LossRecord& r : h) {
       if (r.val >= 0) std::snprintf(v, sizeof v, "%.9g", r.val);
       else v[0] = 0;  // no validation set: an empty field
-      std::snprintf(b, sizeof b, "%d,%.9g,%s,%.6g,%.4g\n", r.epoch, r.train, v, r.lr, r.seconds);
+      if (r.val_l1 >= 0) std::snprintf(l1, sizeof l1, "%.9g", r.val_l1);
+      else l1[0] = 0;  // not a skin-weight model, or not validated this epoch
+      std::snprintf(b, sizeof b, "%d,%.9g,%s,%.6g,%.4g,%s\n", r.epoch, r.train, v, r.lr, r.seconds, l1);
       f += b;
     }
     write_file_atomic(csv, f);
   }
-  PlotSeries train{"train", {}, {}}, val{"validation", {}, {}};
+  PlotSeries train{"train", {}, {}}, val{"validation", {}, {}}, l1{"validation L1", {}, {}};
   for (const LossRecord& r : h) {
     train.x.push_back(float(r.epoch));
     train.y.push_back(float(r.train));
@@ -70,9 +80,14 @@ void write_loss_outputs(const std::vector<LossRecord>& h, const std::string& png
       val.x.push_back(float(r.epoch));
       val.y.push_back(float(r.val));
     }
+    if (r.val_l1 >= 0) {
+      l1.x.push_back(float(r.epoch));
+      l1.y.push_back(float(r.val_l1));
+    }
   }
   std::vector<PlotSeries> series{train};
   if (!val.x.empty()) series.push_back(val);
+  if (!l1.x.empty()) series.push_back(l1);
   write_png(png, plot_series(series));
 }
 

@@ -13,9 +13,11 @@ struct LossRecord {
   int epoch = 0;
   double train = 0, val = -1;  // val < 0: no validation set
   double lr = 0, seconds = 0;
+  double val_l1 = -1;  // skin-weight models: validation L1 (models::Evaluation); < 0: not measured
 };
 
-// "epoch:train:val:lr:seconds;..." (checkpoint metadata "loss_history").
+// "epoch:train:val:lr:seconds[:val_l1];..." (checkpoint metadata
+// "loss_history"; val_l1 only where measured, so older checkpoints read the same).
 std::string format_history(const std::vector<LossRecord>& h);
 // Throws InvalidArgument naming `what` for a malformed string.
 std::vector<LossRecord> parse_history(const std::string& s, const std::string& what);
