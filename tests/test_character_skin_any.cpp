@@ -12,6 +12,7 @@
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/eval/metrics.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
 #include "gatcore/error.hpp"
@@ -315,4 +316,54 @@ TEST_CASE("a batch takes every sample's log prior or none", "[skin_any]") {
   // A pair scorer needs the slots' columns inside the input.
   cfg.pair_features = 100;
   CHECK_THROWS_WITH(models::make_model(cfg, 1), Catch::Contains("pair_features"));
+}
+
+TEST_CASE("skinweights-any's validation L1 is gat eval's L1 over the character's joints", "[skin_any]") {
+  // With k = 2 candidates some vertices have artist weight on a third joint:
+  // the target (renormalised over the candidates) alone would understate the
+  // error there. Trainer::validate must give what evaluating the predicted
+  // weights against the character's own weights gives.
+  const PreparedCharacter pc = procedural(ProceduralKind::humanoid, 3);
+  const int k = 2;
+  BoneCandidates c;
+  const models::Sample s = bone_candidate_sample(pc, k, &c);
+  REQUIRE(s.target_mass.defined());
+  int partial = 0, none = 0;
+  for (std::int64_t v = 0; v < s.target_mass.rows(); ++v) {
+    const float m = s.target_mass.at(v, 0);
+    CHECK(m >= 0.0f);
+    CHECK(m <= 1.0f + 1e-6f);
+    partial += m < 0.999f;
+    none += m == 0.0f;
+  }
+  INFO(partial << " vertices with weight outside their candidates, " << none << " with all of it");
+  REQUIRE(partial > 0);
+  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+  cfg.stage1 = {16, 8};
+  cfg.gc_dims = {8, 8, 8};
+  cfg.global_mlp = {16};
+  cfg.classifier = {16};
+  auto model = models::make_model(cfg, 2);
+  randomise_last_layer(*model, 3);
+  const models::Normaliser norm = models::Normaliser::fit({s}, false);
+  models::Trainer t(*model, models::TrainOptions::defaults_for(cfg), norm);
+  const double l1 = t.validate({s}).weight_l1;
+
+  const SkinWeights p = predict_skin_weights_any(*model, norm, pc, models::kEvaluationInfluences);
+  const SkinWeights& w = pc.character.mesh.weights;
+  const std::int64_t n = w.num_vertices(), J = pc.character.skeleton.num_joints();
+  std::vector<float> pd(std::size_t(n * J), 0.0f), td(std::size_t(n * J), 0.0f);
+  for (std::int64_t v = 0; v < n; ++v) {
+    double total = 0;
+    for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e) total += w.weight[e];
+    for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e) td[std::size_t(v * J + w.joint[e])] += float(w.weight[e] / total);
+    for (std::int64_t e = p.ptr[v]; e < p.ptr[v + 1]; ++e) pd[std::size_t(v * J + p.joint[e])] += p.weight[e];
+  }
+  const double want = weight_metrics(pd, td, J).l1_mean;
+  CHECK(l1 == Approx(want).epsilon(1e-5));
+  // Without the mass the figure is the candidates' only, and lower: the test
+  // tells the two apart.
+  models::Sample candidates_only = s;
+  candidates_only.target_mass = Tensor{};
+  CHECK(t.validate({candidates_only}).weight_l1 < want - 1e-3);
 }

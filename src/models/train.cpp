@@ -436,9 +436,18 @@ Evaluation Trainer::validate(const std::vector<Sample>& samples) {
     if (weights) {
       const Tensor w = top_k_renormalise(to(pred.value(), Device::cpu), kEvaluationInfluences);
       const Tensor t = to(b.target, Device::cpu);
+      const bool partial = s.target_mass.defined();
+      GATCORE_CHECK(!partial || (s.target_mass.rows() == w.rows() && s.target_mass.cols() == 1), s.name,
+                    ": target_mass is ", s.target_mass.rows(), " x ", s.target_mass.cols(), " for ", w.rows(),
+                    " vertices");
       double sum = 0;
-      for (std::int64_t r = 0; r < w.rows(); ++r)
-        for (std::int64_t c = 0; c < w.cols(); ++c) sum += std::abs(double(w.at(r, c)) - double(t.at(r, c)));
+      for (std::int64_t r = 0; r < w.rows(); ++r) {
+        // The truth is t * m over the target's columns and 1 - m elsewhere,
+        // where the prediction puts nothing.
+        const double m = partial ? double(s.target_mass.at(r, 0)) : 1.0;
+        for (std::int64_t c = 0; c < w.cols(); ++c) sum += std::abs(double(w.at(r, c)) - m * double(t.at(r, c)));
+        sum += 1.0 - m;
+      }
       l1[i] = w.rows() > 0 ? sum / double(w.rows()) : 0.0;
     }
     forget_graphs(b, model_.device());

@@ -24,6 +24,12 @@ struct Sample {
   // ModelConfig::logit_prior (skinweights-any: log(bone heat + eps) of each
   // candidate); not normalised. Values under a 0 of the mask do not matter.
   Tensor prior;
+  // Optional [n, 1] for skin weights whose target columns hold only part of
+  // the truth (skinweights-any: the vertex's candidate bones): the share of
+  // the vertex's true weights they hold; the target rows are those weights
+  // renormalised. Trainer::validate's L1 then counts the rest as error, so
+  // it equals the L1 over the character's joints (gat eval's). Absent: 1.
+  Tensor target_mass;
 };
 
 // Per-column feature normalisation (z-score) and a scalar target scale for

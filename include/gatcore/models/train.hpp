@@ -132,8 +132,10 @@ struct Evaluation {
   // sum_j |w_j - t_j|, averaged over the samples (as `gat eval`'s overall
   // row averages its characters), w the prediction kept to its kEvaluationInfluences
   // largest weights and renormalised (what predict_skin_weights gives by
-  // default), t the sample's target (skinweights-any: its candidates'
-  // weights, renormalised over the candidates). -1 for displacements.
+  // default), t the sample's target (where the sample has a target_mass,
+  // the truth over the target's columns is t times it and the rest counts as
+  // error: skinweights-any's L1 is over the character's joints, as gat
+  // eval's). -1 for displacements.
   double weight_l1 = -1;
 };
 inline constexpr int kEvaluationInfluences = 4;

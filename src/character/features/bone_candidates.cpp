@@ -148,6 +148,26 @@ Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w) {
   return t;
 }
 
+Tensor candidate_target_mass(const BoneCandidates& c, const SkinWeights& w) {
+  const std::int64_t n = w.num_vertices();
+  GATCORE_CHECK(static_cast<std::int64_t>(c.joint.size()) == n * c.k, "candidate_target_mass: ",
+                c.joint.size() / std::max(1, c.k), " candidate rows for ", n, " weight rows");
+  Tensor m = Tensor::zeros(n, 1);
+  for (std::int64_t v = 0; v < n; ++v) {
+    double total = 0, held = 0;
+    for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e) {
+      total += w.weight[e];
+      for (int i = 0; i < c.valid; ++i)
+        if (w.joint[e] == c.joint[static_cast<std::size_t>(v * c.k + i)]) {
+          held += w.weight[e];
+          break;
+        }
+    }
+    m.at(v, 0) = total > 0 ? static_cast<float>(held / total) : 1.0f;
+  }
+  return m;
+}
+
 SkinWeights weights_from_candidates(const BoneCandidates& c, const Tensor& p) {
   const std::int64_t n = static_cast<std::int64_t>(c.joint.size()) / std::max(1, c.k);
   GATCORE_CHECK(p.rows() == n && p.cols() == c.k, "weights_from_candidates: ", p.rows(), " x ", p.cols(),

@@ -52,6 +52,11 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k = kDef
 // joints are all outside its candidates puts 1 on its nearest candidate).
 Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w);
 
+// [n, 1]: the share of each vertex's weights (of their sum) that its
+// candidates hold, 0 where none does (models::Sample::target_mass): with it a
+// validation L1 over the candidates is the L1 over the character's joints.
+Tensor candidate_target_mass(const BoneCandidates& c, const SkinWeights& w);
+
 // The log prior of skinweights-any's logits (models::Sample::prior, [n, k]):
 // log(bone heat's weight of the candidate + eps) for the valid candidates, 0
 // past them (masked). softmax of it is bone heat over the vertex's
