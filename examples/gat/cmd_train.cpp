@@ -351,6 +351,13 @@ int run_train(TrainArgs a) {
                  resume.c_str(), cfg.pair_scorer.empty() ? "no pair scorer" : "another pair scorer");
     return 2;
   }
+  // Before any sample is built: --keep-best's figure (the L1 only exists for skin weights).
+  if (keep_best_by.empty()) keep_best_by = cfg.task == Task::weights ? "l1" : "loss";
+  if (keep_best_by == "l1" && cfg.task != Task::weights) {
+    std::fprintf(stderr, "gat train: --keep-best-by l1 needs a skin-weight model; %s predicts displacements\n",
+                 cfg.name.c_str());
+    return 2;
+  }
   const bool any_skeleton = cfg.name == "skinweights-any";
   if (td && !any_skeleton) {
     GATCORE_CHECK(cfg.in_dim == td->feature_dim(cfg.task) &&
@@ -504,12 +511,6 @@ int run_train(TrainArgs a) {
   }
   // --keep-best: the lowest validation loss (or L1) so far, a resumed run's
   // history included (an older checkpoint's history has no L1: it starts afresh).
-  if (keep_best_by.empty()) keep_best_by = cfg.task == Task::weights ? "l1" : "loss";
-  if (keep_best_by == "l1" && cfg.task != Task::weights) {
-    std::fprintf(stderr, "gat train: --keep-best-by l1 needs a skin-weight model; %s predicts displacements\n",
-                 cfg.name.c_str());
-    return 2;
-  }
   const bool by_l1 = keep_best_by == "l1";
   const auto figure = [&](double val, double val_l1) { return by_l1 ? val_l1 : val; };
   const char* figure_name = by_l1 ? "validation L1" : "validation loss";
