@@ -89,6 +89,11 @@ TEST_CASE("weight evaluation: everything on the root bone, hand-computed", "[cha
   CHECK(r.vertex_l1.back() == Approx(2.0f));  // the top cap centre
   CHECK(r.vertex_l1.front() == 0.0f);
   CHECK(r.dominant == Approx(double(lower) / double(n)));
+  // The wrong vertices are all one confusion: the artist's bone1 given to root.
+  REQUIRE(r.confusions.size() == 1);
+  CHECK(r.confusions[0].truth == pc.character.skeleton.names[1]);
+  CHECK(r.confusions[0].predicted == pc.character.skeleton.names[0]);
+  CHECK(r.confusions[0].vertices == upper);
 
   // --min-weight: 0.9 on the truth plus 0.1 on the other bone everywhere.
   // Unpruned every vertex selects both bones (precision 0.5, L1 0.2);
@@ -103,6 +108,7 @@ TEST_CASE("weight evaluation: everything on the root bone, hand-computed", "[cha
   CHECK(rb.weights.precision == Approx(0.5));
   CHECK(rb.weights.l1_mean == Approx(0.2));
   CHECK(rb.dominant == 1.0);
+  CHECK(rb.confusions.empty());
   WeightEvalOptions pruned = o;
   pruned.min_weight = 0.2f;
   const auto rp = evaluate_character_weights(pc, blurred, truth, 3, kJointToBone, kMask, pruned);
@@ -138,6 +144,26 @@ TEST_CASE("weight evaluation: everything on the root bone, hand-computed", "[cha
                     Contains("1 predicted and") && Contains(std::to_string(n) + " vertices"));
 }
 
+TEST_CASE("dominant_confusions counts (artist's, predicted) columns, most first, within the mask", "[character][weighteval]") {
+  // 5 rows x 3 columns; column 1 is masked out (its large values must not count).
+  const std::vector<float> truth{1, 0, 0,  1, 0, 0,  0, 0, 1,  1, 0, 0,  0, 9, 1};
+  const std::vector<float> pred{0, 0, 1,  0, 5, 1,  1, 0, 0,  1, 0, 0,  1, 0, 0};
+  const std::vector<std::uint8_t> mask{1, 0, 1};
+  const auto c = dominant_confusions(pred, truth, 3, mask);
+  REQUIRE(c.size() == 2);
+  CHECK(c[0] == std::array<std::int64_t, 3>{0, 2, 2});  // rows 0 and 1
+  CHECK(c[1] == std::array<std::int64_t, 3>{2, 0, 2});  // rows 2 and 4 (row 4's 9 is masked)
+  CHECK(dominant_accuracy(pred, truth, 3, mask) == Approx(0.2));
+  // Unmasked, row 1 predicts column 1 and row 4's truth is column 1.
+  const auto u = dominant_confusions(pred, truth, 3);
+  REQUIRE(u.size() == 4);
+  std::int64_t rows = 0;
+  for (const auto& x : u) rows += x[2];
+  CHECK(rows == 4);
+  CHECK_THROWS_WITH(dominant_confusions(pred, truth, 3, std::vector<std::uint8_t>{1, 0}), Contains("mask has 2"));
+  CHECK_THROWS_WITH(dominant_confusions(pred, std::vector<float>(3, 0.f), 3), Contains("dominant_confusions"));
+}
+
 TEST_CASE("weight evaluation: summary, Markdown and JSON", "[character][weighteval]") {
   CharacterWeightEval a, b;
   a.name = "men/A";
@@ -167,6 +193,18 @@ TEST_CASE("weight evaluation: summary, Markdown and JSON", "[character][weightev
   CHECK(j.at("characters")[1].at("name") == "women/B");
   CHECK(j.at("overall").at("recall").get<double>() == Approx(0.9));
   CHECK(j.at("overall").at("dominant").get<double>() == Approx(0.8));
+  CHECK_FALSE(j.at("characters")[0].contains("confusions"));  // only when asked for
+  a.confusions = {{"Neck", "Head", 7}, {"Shin", "Foot", 3}, {"Hips", "Spine", 1}};
+  const auto jc = nlohmann::json::parse(weight_eval_json("fc", {a, b}, WeightEvalOptions{}, 2));
+  REQUIRE(jc.at("characters")[0].at("confusions").size() == 2);
+  CHECK(jc.at("characters")[0].at("confusions")[0].at("truth") == "Neck");
+  CHECK(jc.at("characters")[0].at("confusions")[0].at("predicted") == "Head");
+  CHECK(jc.at("characters")[0].at("confusions")[0].at("vertices") == 7);
+  CHECK(jc.at("characters")[1].at("confusions").empty());
+  const std::string cm = weight_eval_confusions_markdown({a, b}, 2);
+  CHECK_THAT(cm, Contains("- men/A: Neck -> Head: 7, Shin -> Foot: 3\n"));
+  CHECK_THAT(cm, Contains("- women/B: none\n"));
+  CHECK(weight_eval_confusions_markdown({a, b}, 0).empty());
   const auto path = (std::filesystem::temp_directory_path() / "gatcore_weight_eval.json").string();
   write_text_atomic(path, "{}\n");
   std::ifstream f(path);

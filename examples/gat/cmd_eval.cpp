@@ -35,6 +35,7 @@ struct EvalArgs {
   std::string data, part = "test", json_path, errormap_dir, baseline;
   long samples = 16, seed = 12345, poses = 16, size = 320;
   double min_weight = 0;
+  long confusions = 0;
   gat::EvalMotionArgs motion;
   gat::CommonOptions common;
 };
@@ -65,6 +66,10 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
                "skin weights: drop predicted influences below W of the vertex's total (renormalised) before the "
                "metrics (default 0; bone heat: 0.01)")
       ->check(number_in(0, 0.999999));
+  c.add_option("--confusions", a->confusions,
+               "skin weights: after the table, each character's N largest dominant-bone confusions (artist's joint -> "
+               "predicted joint: vertices), also in the JSON; shows which boundaries a method places differently")
+      ->check(CLI::Range(0L, 1000L));
   c.add_option("--data", a->data,
                "evaluate on a dataset's characters (default: the dataset the checkpoint was trained on, if any; "
                "required with --motion); displacement: N poses per character");
@@ -136,7 +141,8 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
       GATCORE_CHECK(a->models.empty(), "--baseline evaluates a classical method; drop --model");
       GATCORE_CHECK(!a->data.empty(), "--baseline needs --data DATASET");
       return eval_weight_baseline(a->baseline, a->data, a->part, a->poses, a->seed,
-                                  c.count("--min-weight") ? a->min_weight : -1.0, a->json_path, a->common.quiet);
+                                  c.count("--min-weight") ? a->min_weight : -1.0, a->json_path, a->common.quiet,
+                                  int(a->confusions));
     }
     GATCORE_CHECK(!a->models.empty(), "--model is required (or --baseline)");
     GATCORE_CHECK(a->models.size() == 1, "--model: give one checkpoint (got ", a->models.size(),
@@ -158,7 +164,7 @@ int run_eval(const EvalArgs& a) {
     // Each character's own joints (no super skeleton): the baselines' protocol.
     if (data.empty() && l.file.metadata.count("data_path")) data = l.file.metadata.at("data_path");
     return gat::eval_weight_baseline("skinweights-any", data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
-                                      json_path, a.common.quiet, &l);
+                                      json_path, a.common.quiet, int(a.confusions), &l);
   }
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
@@ -278,6 +284,9 @@ int run_eval(const EvalArgs& a) {
       eo.pose_angle = td.description.pose_angle;
       eo.seed = std::uint32_t(seed);
       eo.min_weight = float(a.min_weight);
+      // The confusions are lists of names, not figures the ranks can sum.
+      GATCORE_CHECK(a.confusions == 0 || comm.size() == 1,
+                    "--confusions needs one process (drop it, or run gat eval without mpirun)");
       // Each character on the rank that predicted it; the figures gathered as above.
       constexpr std::size_t kFields = 11;
       std::vector<double> fields(data_.size() * kFields, 0.0);
@@ -298,6 +307,7 @@ int run_eval(const EvalArgs& a) {
             std::span<const float>(t.data(), std::size_t(t.numel())), y.cols(), td.super.joint_to_bone[std::size_t(c)],
             mask, eo, c);
         r.name = per[i].name;
+        per[i].confusions = std::move(r.confusions);  // names: one process only (checked above)
         if (!errormap_dir.empty()) {
           std::filesystem::create_directories(errormap_dir);
           const auto& mesh = td.characters[std::size_t(c)].character.mesh;
@@ -333,7 +343,7 @@ int run_eval(const EvalArgs& a) {
           std::printf("  error map: %s\n", (std::filesystem::path(errormap_dir) / (file + ".png")).string().c_str());
         }
       }
-      gat::print_weight_table(per, eo, cfg.name, root ? json_path : std::string());
+      gat::print_weight_table(per, eo, cfg.name, root ? json_path : std::string(), int(a.confusions));
     } else if (!json_path.empty() || !errormap_dir.empty()) {
       std::fprintf(stderr, "gat eval: --json / --errormaps need a dataset (--data)\n");
       return 2;

@@ -15,7 +15,7 @@ using namespace gatcore;
 namespace gat {
 
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
-                         long seed, double min_weight, const std::string& json_path, bool quiet,
+                         long seed, double min_weight, const std::string& json_path, bool quiet, int confusions,
                          models::LoadedModel* model) {
   if (!model && method != "bone-heat") {
     std::fprintf(stderr, "gat eval: --baseline expects bone-heat, got '%s'\n", method.c_str());
@@ -80,18 +80,19 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
                 pc.character.skeleton.num_joints(), s);
     per.push_back(std::move(r));
   }
-  print_weight_table(per, eo, model ? method : std::string("bone-heat"), json_path);
+  print_weight_table(per, eo, model ? method : std::string("bone-heat"), json_path, confusions);
   return 0;
 }
 
 void print_weight_table(const std::vector<character::CharacterWeightEval>& per, const character::WeightEvalOptions& eo,
-                        const std::string& method, const std::string& json_path) {
+                        const std::string& method, const std::string& json_path, int confusions) {
   std::printf("\n%s", character::weight_eval_markdown(per).c_str());
   std::printf("(deformation: LBS with predicted vs artist weights, %d random poses within +-%.2f rad, two worst "
               "poses, divided by the character's height)\n",
               eo.poses, double(eo.pose_angle));
+  std::printf("%s", character::weight_eval_confusions_markdown(per, confusions).c_str());
   if (!json_path.empty()) {
-    character::write_text_atomic(json_path, character::weight_eval_json(method, per, eo));
+    character::write_text_atomic(json_path, character::weight_eval_json(method, per, eo, confusions));
     std::printf("  JSON: %s\n", json_path.c_str());
   }
 }

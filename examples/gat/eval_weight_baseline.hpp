@@ -14,12 +14,13 @@
 
 namespace gat {
 // Prints the per-character Markdown table and its legend, and writes the JSON
-// when json_path is set (shared with cmd_eval's super-skeleton models).
+// when json_path is set (shared with cmd_eval's super-skeleton models); with
+// confusions > 0, each character's largest dominant-bone confusions too.
 void print_weight_table(const std::vector<gatcore::character::CharacterWeightEval>& per,
                         const gatcore::character::WeightEvalOptions& eo, const std::string& method,
-                        const std::string& json_path);
+                        const std::string& json_path, int confusions = 0);
 // model: null for a baseline (method "bone-heat"), else a skinweights-any checkpoint.
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
-                         long seed, double min_weight, const std::string& json_path, bool quiet,
+                         long seed, double min_weight, const std::string& json_path, bool quiet, int confusions = 0,
                          gatcore::models::LoadedModel* model = nullptr);
 }

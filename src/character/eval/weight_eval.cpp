@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -53,26 +54,54 @@ SkinWeights weights_from_super(std::span<const float> dense, std::int64_t num_bo
   return w;
 }
 
+namespace {
+
+// Largest entry of row v over `mask` (ties: the first column); -1 if the mask
+// leaves no column.
+std::int64_t row_argmax(std::span<const float> x, std::int64_t cols, std::int64_t v, std::span<const std::uint8_t> mask) {
+  std::int64_t best = -1;
+  for (std::int64_t b = 0; b < cols; ++b) {
+    if (!mask.empty() && !mask[static_cast<std::size_t>(b)]) continue;
+    if (best < 0 || x[static_cast<std::size_t>(v * cols + b)] > x[static_cast<std::size_t>(v * cols + best)]) best = b;
+  }
+  return best;
+}
+
+void check_dominant_args(const char* what, std::span<const float> predicted, std::span<const float> truth,
+                         std::int64_t cols, std::span<const std::uint8_t> mask) {
+  GATCORE_CHECK(cols > 0 && predicted.size() == truth.size() && predicted.size() % static_cast<std::size_t>(cols) == 0,
+                what, ": ", predicted.size(), " predicted and ", truth.size(), " true values for ", cols, " columns");
+  GATCORE_CHECK(mask.empty() || static_cast<std::int64_t>(mask.size()) == cols, what, ": mask has ", mask.size(),
+                " entries for ", cols, " columns");
+}
+
+}  // namespace
+
 double dominant_accuracy(std::span<const float> predicted, std::span<const float> truth, std::int64_t cols,
                          std::span<const std::uint8_t> mask) {
-  GATCORE_CHECK(cols > 0 && predicted.size() == truth.size() && predicted.size() % static_cast<std::size_t>(cols) == 0,
-                "dominant_accuracy: ", predicted.size(), " predicted and ", truth.size(), " true values for ", cols,
-                " columns");
-  GATCORE_CHECK(mask.empty() || static_cast<std::int64_t>(mask.size()) == cols, "dominant_accuracy: mask has ",
-                mask.size(), " entries for ", cols, " columns");
+  check_dominant_args("dominant_accuracy", predicted, truth, cols, mask);
   const std::int64_t n = static_cast<std::int64_t>(predicted.size()) / cols;
   if (n == 0) return 0.0;
-  auto argmax = [&](std::span<const float> x, std::int64_t v) {
-    std::int64_t best = -1;
-    for (std::int64_t b = 0; b < cols; ++b) {
-      if (!mask.empty() && !mask[static_cast<std::size_t>(b)]) continue;
-      if (best < 0 || x[static_cast<std::size_t>(v * cols + b)] > x[static_cast<std::size_t>(v * cols + best)]) best = b;
-    }
-    return best;
-  };
   std::int64_t right = 0;
-  for (std::int64_t v = 0; v < n; ++v) right += argmax(predicted, v) == argmax(truth, v);
+  for (std::int64_t v = 0; v < n; ++v)
+    right += row_argmax(predicted, cols, v, mask) == row_argmax(truth, cols, v, mask);
   return static_cast<double>(right) / static_cast<double>(n);
+}
+
+std::vector<std::array<std::int64_t, 3>> dominant_confusions(std::span<const float> predicted,
+                                                             std::span<const float> truth, std::int64_t cols,
+                                                             std::span<const std::uint8_t> mask) {
+  check_dominant_args("dominant_confusions", predicted, truth, cols, mask);
+  const std::int64_t n = static_cast<std::int64_t>(predicted.size()) / cols;
+  std::map<std::pair<std::int64_t, std::int64_t>, std::int64_t> count;
+  for (std::int64_t v = 0; v < n; ++v) {
+    const std::int64_t t = row_argmax(truth, cols, v, mask), p = row_argmax(predicted, cols, v, mask);
+    if (t != p) ++count[{t, p}];
+  }
+  std::vector<std::array<std::int64_t, 3>> out;
+  for (const auto& [k, c] : count) out.push_back({k.first, k.second, c});
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a[2] > b[2]; });
+  return out;
 }
 
 CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std::span<const float> predicted_in,
@@ -105,6 +134,20 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
   r.height = 1.0 / static_cast<double>(pc.norm.scale);
   r.weights = weight_metrics(predicted, truth, num_bones, opts.threshold, mask);
   r.dominant = dominant_accuracy(predicted, truth, num_bones, mask);
+  {
+    // Bone columns -> the character's joint names.
+    std::vector<std::string> bone_name(static_cast<std::size_t>(num_bones));
+    for (std::size_t j = 0; j < joint_to_bone.size(); ++j)
+      if (joint_to_bone[j] >= 0 && joint_to_bone[j] < num_bones)
+        bone_name[static_cast<std::size_t>(joint_to_bone[j])] = pc.character.skeleton.names[j];
+    const auto name = [&](std::int64_t b) {
+      if (b < 0) return std::string("(none)");
+      const std::string& s = bone_name[static_cast<std::size_t>(b)];
+      return s.empty() ? "bone " + std::to_string(b) : s;
+    };
+    for (const auto& [t, p, c] : dominant_confusions(predicted, truth, num_bones, mask))
+      r.confusions.push_back({name(t), name(p), c});
+  }
   r.vertex_l1.resize(static_cast<std::size_t>(n));
   for (std::int64_t v = 0; v < n; ++v) {
     double l1 = 0;
@@ -203,8 +246,22 @@ std::string weight_eval_markdown(const std::vector<CharacterWeightEval>& per_cha
   return s;
 }
 
+std::string weight_eval_confusions_markdown(const std::vector<CharacterWeightEval>& per_character, int top) {
+  if (top < 1) return {};
+  std::string s = "\nDominant bone: where it differs from the artist's (artist's joint -> predicted joint: vertices)\n";
+  for (const auto& c : per_character) {
+    s += "- " + c.name + ":";
+    if (c.confusions.empty()) s += " none";
+    for (std::size_t i = 0; i < c.confusions.size() && i < static_cast<std::size_t>(top); ++i)
+      s += std::string(i ? "," : "") + " " + c.confusions[i].truth + " -> " + c.confusions[i].predicted + ": " +
+           std::to_string(c.confusions[i].vertices);
+    s += "\n";
+  }
+  return s;
+}
+
 std::string weight_eval_json(const std::string& method, const std::vector<CharacterWeightEval>& per_character,
-                             const WeightEvalOptions& opts) {
+                             const WeightEvalOptions& opts, int confusions) {
   nlohmann::json j;
   j["method"] = method;
   j["options"] = {{"poses", opts.poses},   {"pose_angle", opts.pose_angle}, {"seed", opts.seed},
@@ -222,6 +279,14 @@ std::string weight_eval_json(const std::string& method, const std::vector<Charac
                                {"deform_mean", c.deformation.mean},
                                {"deform_max", c.deformation.max},
                                {"dominant", c.dominant}});
+  if (confusions > 0)
+    for (std::size_t i = 0; i < per_character.size(); ++i) {
+      nlohmann::json list = nlohmann::json::array();
+      const auto& cs = per_character[i].confusions;
+      for (std::size_t k = 0; k < cs.size() && k < static_cast<std::size_t>(confusions); ++k)
+        list.push_back({{"truth", cs[k].truth}, {"predicted", cs[k].predicted}, {"vertices", cs[k].vertices}});
+      j["characters"][i]["confusions"] = std::move(list);
+    }
   const WeightEvalSummary o = summarise_weight_eval(per_character);
   j["overall"] = {{"characters", o.characters}, {"precision", o.precision},     {"recall", o.recall},
                   {"l1_mean", o.l1_mean},       {"l1_max", o.l1_max},           {"deform_mean", o.deform_mean},

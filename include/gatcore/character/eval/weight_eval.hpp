@@ -5,6 +5,7 @@
 // (LBS with the predicted weights against LBS with the artist's weights),
 // normalised by the character's height. Weights are dense rows over a super
 // skeleton; `joint_to_bone` maps the character's joints to its bones.
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -28,6 +29,13 @@ struct WeightEvalOptions {
   float min_weight = 0.0f;
 };
 
+// Vertices whose predicted dominant bone is `predicted` where the artist's
+// is `truth` (joint names of the character).
+struct BoneConfusion {
+  std::string truth, predicted;
+  std::int64_t vertices = 0;
+};
+
 struct CharacterWeightEval {
   std::string name;
   std::int64_t vertices = 0;
@@ -36,6 +44,10 @@ struct CharacterWeightEval {
   DistanceStats deformation;    // worst poses, mean / max / min divided by height
   std::vector<float> vertex_l1; // per-vertex L1 weight error (for error maps)
   double dominant = 0;          // fraction of vertices whose largest predicted bone is the artist's largest
+  // Where the dominant bone is wrong: every (artist's, predicted) pair of
+  // joints, most vertices first. Shows which boundaries a method places
+  // differently from the artist (e.g. a neck given to the head).
+  std::vector<BoneConfusion> confusions;
 };
 
 // Dense [n x num_bones] super-skeleton weights -> the character's joints
@@ -77,11 +89,22 @@ double dominant_accuracy(std::span<const float> predicted, std::span<const float
                          std::span<const std::uint8_t> mask = {});
 WeightEvalSummary summarise_weight_eval(const std::vector<CharacterWeightEval>& per_character);
 
+// The confusions of dominant_accuracy's rows: (truth column, predicted
+// column) -> rows, for the rows where they differ; most rows first, ties by
+// column. Columns name nothing: evaluate_character_weights names them.
+std::vector<std::array<std::int64_t, 3>> dominant_confusions(std::span<const float> predicted,
+                                                             std::span<const float> truth, std::int64_t cols,
+                                                             std::span<const std::uint8_t> mask = {});
+
 // A Markdown table: one row per character and an "overall" row.
 std::string weight_eval_markdown(const std::vector<CharacterWeightEval>& per_character);
-// JSON text: {"method", "options", "characters": [...], "overall": {...}}.
+// Markdown: per character, its `top` largest confusions ("artist's joint ->
+// predicted joint: vertices"); empty if top < 1.
+std::string weight_eval_confusions_markdown(const std::vector<CharacterWeightEval>& per_character, int top);
+// JSON text: {"method", "options", "characters": [...], "overall": {...}};
+// each character lists its `confusions` largest confusions (0: none).
 std::string weight_eval_json(const std::string& method, const std::vector<CharacterWeightEval>& per_character,
-                             const WeightEvalOptions& opts);
+                             const WeightEvalOptions& opts, int confusions = 0);
 
 // Writes `text` to "<path>.tmp" and renames it over `path`; throws
 // InvalidArgument naming the path on failure.
