@@ -127,19 +127,32 @@ Tensor bone_heat_log_prior(const BoneCandidates& c, float eps) {
   return p;
 }
 
+namespace {
+
+void check_candidate_rows(const char* what, const BoneCandidates& c, const SkinWeights& w) {
+  GATCORE_CHECK(static_cast<std::int64_t>(c.joint.size()) == w.num_vertices() * c.k, what, ": ",
+                c.joint.size() / std::max(1, c.k), " candidate rows for ", w.num_vertices(), " weight rows");
+}
+
+// The artist's weight of vertex v on its candidate i (the candidate joint's
+// entries of the row summed).
+float candidate_weight(const BoneCandidates& c, const SkinWeights& w, std::int64_t v, int i) {
+  const std::int32_t j = c.joint[static_cast<std::size_t>(v * c.k + i)];
+  float x = 0.0f;
+  for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e)
+    if (w.joint[e] == j) x += w.weight[e];
+  return x;
+}
+
+}  // namespace
+
 Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w) {
+  check_candidate_rows("candidate_targets", c, w);
   const std::int64_t n = w.num_vertices();
-  GATCORE_CHECK(static_cast<std::int64_t>(c.joint.size()) == n * c.k, "candidate_targets: ", c.joint.size() / std::max(1, c.k),
-                " candidate rows for ", n, " weight rows");
   Tensor t = Tensor::zeros(n, c.k);
   for (std::int64_t v = 0; v < n; ++v) {
     double s = 0;
-    for (int i = 0; i < c.valid; ++i) {
-      const std::int32_t j = c.joint[static_cast<std::size_t>(v * c.k + i)];
-      for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e)
-        if (w.joint[e] == j) t.at(v, i) += w.weight[e];
-      s += t.at(v, i);
-    }
+    for (int i = 0; i < c.valid; ++i) s += t.at(v, i) = candidate_weight(c, w, v, i);
     if (s > 0)
       for (int i = 0; i < c.valid; ++i) t.at(v, i) = static_cast<float>(t.at(v, i) / s);
     else
@@ -149,20 +162,13 @@ Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w) {
 }
 
 Tensor candidate_target_mass(const BoneCandidates& c, const SkinWeights& w) {
+  check_candidate_rows("candidate_target_mass", c, w);
   const std::int64_t n = w.num_vertices();
-  GATCORE_CHECK(static_cast<std::int64_t>(c.joint.size()) == n * c.k, "candidate_target_mass: ",
-                c.joint.size() / std::max(1, c.k), " candidate rows for ", n, " weight rows");
   Tensor m = Tensor::zeros(n, 1);
   for (std::int64_t v = 0; v < n; ++v) {
     double total = 0, held = 0;
-    for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e) {
-      total += w.weight[e];
-      for (int i = 0; i < c.valid; ++i)
-        if (w.joint[e] == c.joint[static_cast<std::size_t>(v * c.k + i)]) {
-          held += w.weight[e];
-          break;
-        }
-    }
+    for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e) total += w.weight[e];
+    for (int i = 0; i < c.valid; ++i) held += candidate_weight(c, w, v, i);
     m.at(v, 0) = total > 0 ? static_cast<float>(held / total) : 1.0f;
   }
   return m;

@@ -33,12 +33,12 @@ std::vector<LossRecord> parse_history(const std::string& s, const std::string& w
   std::stringstream ss(s);
   for (std::string item; std::getline(ss, item, ';');) {
     LossRecord r;
-    char tail = 0;
-    const int got = std::sscanf(item.c_str(), "%d:%lf:%lf:%lf:%lf:%lf%c", &r.epoch, &r.train, &r.val, &r.lr, &r.seconds,
-                                &r.val_l1, &tail);
-    // Five fields (no L1 measured) end right after the seconds.
-    const bool five = got == 5 && std::sscanf(item.c_str(), "%*d:%*f:%*f:%*f:%*f%c", &tail) != 1;
-    if (got != 6 && !five)
+    // Five fields, or six with the validation L1, and nothing after them.
+    int end5 = -1, end6 = -1;
+    const int got = std::sscanf(item.c_str(), "%d:%lf:%lf:%lf:%lf%n:%lf%n", &r.epoch, &r.train, &r.val, &r.lr,
+                                &r.seconds, &end5, &r.val_l1, &end6);
+    const int len = static_cast<int>(item.size());
+    if (!(got == 5 && end5 == len) && !(got == 6 && end6 == len))
       throw InvalidArgument(what + ": malformed loss history entry '" + item + "'");
     h.push_back(r);
   }
