@@ -115,7 +115,18 @@ struct GlbOptions {
   bool animation = true;
   bool second_primitive = true;
   bool zero_ibm = false;     // every inverse bind matrix all zeros (singular)
+  // The box on its own node and skin (listed first), stored in its own mesh
+  // space: box_to_bind() maps it onto the tube's bind space, and the skin's
+  // inverse bind matrices are the tube skin's times that map (as an exporter
+  // writing one skin per object does).
+  bool split_skin = false;
 };
+
+// box space -> bind space of split_skin: rotate 90 degrees about z, scale 2,
+// move by (0.3, -0.2, 0.1). Column-major.
+inline gatcore::character::Mat4 box_to_bind() {
+  return {0, 2, 0, 0, -2, 0, 0, 0, 0, 0, 2, 0, 0.3f, -0.2f, 0.1f, 1};
+}
 
 inline void pad4(std::string& s, char c) {
   while (s.size() % 4) s.push_back(c);
@@ -138,8 +149,15 @@ inline std::string skinned_glb(const GlbOptions& o = {}) {
   std::vector<std::uint16_t> bj;
   std::vector<float> bw;
   for (int i = 0; i < 8; ++i) {
-    bj.insert(bj.end(), {1, 0, 0, 0});
+    // The split skin lists bone1 first.
+    bj.insert(bj.end(), {static_cast<std::uint16_t>(o.split_skin ? 0 : 1), 0, 0, 0});
     bw.insert(bw.end(), {1.0f, 0.0f, 0.0f, 0.0f});
+  }
+  if (o.split_skin) {  // into the box's own space: the inverse of box_to_bind()
+    for (std::size_t i = 0; i < bpos.size(); i += 3) {
+      const float x = bpos[i] - 0.3f, y = bpos[i + 1] + 0.2f, z = bpos[i + 2] - 0.1f;
+      bpos[i] = y / 2, bpos[i + 1] = -x / 2, bpos[i + 2] = z / 2;
+    }
   }
   std::vector<std::uint32_t> tri(t.tris.begin(), t.tris.end());
 
@@ -166,7 +184,13 @@ inline std::string skinned_glb(const GlbOptions& o = {}) {
   const int aJ = acc(add(t.joints.data(), t.joints.size() * 2), 5123, nv, "VEC4");
   const int aW = acc(add(t.weights.data(), t.weights.size() * 4), 5126, nv, "VEC4");
   const int aI = acc(add(tri.data(), tri.size() * 4), 5125, tri.size(), "SCALAR");
-  const int bP = acc(add(bpos.data(), bpos.size() * 4), 5126, 8, "VEC3", ",\"min\":[0.5,1.5,0],\"max\":[0.6,1.6,0.1]");
+  std::ostringstream bbox;  // the accessor's min / max, as glTF wants them
+  {
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+    for (std::size_t i = 0; i < bpos.size(); ++i) lo[i % 3] = std::min(lo[i % 3], bpos[i]), hi[i % 3] = std::max(hi[i % 3], bpos[i]);
+    bbox << ",\"min\":[" << lo[0] << "," << lo[1] << "," << lo[2] << "],\"max\":[" << hi[0] << "," << hi[1] << "," << hi[2] << "]";
+  }
+  const int bP = acc(add(bpos.data(), bpos.size() * 4), 5126, 8, "VEC3", bbox.str());
   const int bJ = acc(add(bj.data(), bj.size() * 2), 5123, 8, "VEC4");
   const int bW = acc(add(bw.data(), bw.size() * 4), 5126, 8, "VEC4");
   const int bI = acc(add(btri.data(), btri.size() * 4), 5125, btri.size(), "SCALAR");
@@ -175,6 +199,12 @@ inline std::string skinned_glb(const GlbOptions& o = {}) {
   for (float y : {0.0f, 1.0f, 1.5f}) ibm.insert(ibm.end(), {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -y, 0, 1});
   if (o.zero_ibm) std::fill(ibm.begin(), ibm.end(), 0.0f);
   const int aIbm = acc(add(ibm.data(), ibm.size() * 4), 5126, 3, "MAT4");
+  // Split skin [bone1, root]: the tube's matrices times box_to_bind().
+  const gatcore::character::Mat4 x = box_to_bind();
+  std::vector<float> bibm(x.begin(), x.end());
+  bibm.insert(bibm.end(), x.begin(), x.end());
+  bibm[13] -= 1.0f;  // bone1: translate(0, -1, 0) * x
+  const int bIbm = acc(add(bibm.data(), bibm.size() * 4), 5126, 2, "MAT4");
   const std::vector<float> times = {0.0f, 1.0f};
   const float s = std::sin(0.25f * 3.14159265f), c = std::cos(0.25f * 3.14159265f);
   const std::vector<float> rots = {0, 0, 0, 1, s, 0, 0, c};  // 0 -> 90 degrees about x
@@ -182,17 +212,24 @@ inline std::string skinned_glb(const GlbOptions& o = {}) {
   const int aR = acc(add(rots.data(), 32), 5126, 2, "VEC4");
 
   std::ostringstream j;
-  j << "{\"asset\":{\"version\":\"2.0\",\"generator\":\"gatcore tests\"},\"scene\":0,\"scenes\":[{\"nodes\":[0,3]}],";
+  const bool split = o.split_skin && o.skin && o.second_primitive;
+  j << "{\"asset\":{\"version\":\"2.0\",\"generator\":\"gatcore tests\"},\"scene\":0,\"scenes\":[{\"nodes\":[0,3"
+    << (split ? ",4" : "") << "]}],";
   j << "\"nodes\":[{\"name\":\"root\",\"children\":[1]},{\"name\":\"bone1\",\"translation\":[0,1,0],\"children\":[2]},"
        "{\"name\":\"helper\",\"translation\":[0,0.5,0]},{\"name\":\"body\",\"mesh\":0"
-    << (o.skin ? ",\"skin\":0" : "") << "}],";
+    << (o.skin ? (split ? ",\"skin\":1" : ",\"skin\":0") : "") << "}"
+    << (split ? ",{\"name\":\"box\",\"mesh\":1,\"skin\":0,\"translation\":[5,5,5]}" : "") << "],";
   j << "\"meshes\":[{\"name\":\"tube\",\"primitives\":[{\"attributes\":{\"POSITION\":" << aP << ",\"JOINTS_0\":" << aJ
     << ",\"WEIGHTS_0\":" << aW << "},\"indices\":" << aI << "}";
   if (o.second_primitive)
-    j << ",{\"attributes\":{\"POSITION\":" << bP << ",\"JOINTS_0\":" << bJ << ",\"WEIGHTS_0\":" << bW
-      << "},\"indices\":" << bI << "}";
+    j << (split ? "]},{\"name\":\"box\",\"primitives\":[" : ",") << "{\"attributes\":{\"POSITION\":" << bP
+      << ",\"JOINTS_0\":" << bJ << ",\"WEIGHTS_0\":" << bW << "},\"indices\":" << bI << "}";
   j << "]}],";
-  if (o.skin) j << "\"skins\":[{\"joints\":[0,1,2],\"inverseBindMatrices\":" << aIbm << "}],";
+  if (split)
+    j << "\"skins\":[{\"joints\":[1,0],\"inverseBindMatrices\":" << bIbm << "},{\"joints\":[0,1,2],\"inverseBindMatrices\":"
+      << aIbm << "}],";
+  else if (o.skin)
+    j << "\"skins\":[{\"joints\":[0,1,2],\"inverseBindMatrices\":" << aIbm << "}],";
   if (o.animation)
     j << "\"animations\":[{\"name\":\"bend\",\"samplers\":[{\"input\":" << aT << ",\"output\":" << aR
       << ",\"interpolation\":\"LINEAR\"}],\"channels\":[{\"sampler\":0,\"target\":{\"node\":1,\"path\":\"rotation\"}}]}],";

@@ -10,6 +10,7 @@
 
 #include "character_fixtures.hpp"
 #include "gatcore/character/deform/deform.hpp"
+#include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/io/gltf.hpp"
 #include "gatcore/character/io/target_frames.hpp"
 #include "gatcore/error.hpp"
@@ -251,6 +252,70 @@ TEST_CASE("glTF export of new weights re-imports with those weights, the rest in
   }
   SkinWeights wrong;
   CHECK_THROWS_WITH(save_gltf_with_weights(src, ch, wrong, "/tmp/x.glb"), Contains("weight rows"));
+}
+
+TEST_CASE("glTF import of one skin per mesh, each relative to its own mesh, in one bind space",
+          "[character][gltf][export]") {
+  // The same tube and box as the one-skin file, but the box on its own node
+  // with its own skin (listed first), stored in its own space and bound by
+  // matrices relative to it: the first skin's matrices must not place the
+  // tube, nor the tube's the box.
+  charfix::GlbOptions so;
+  so.split_skin = true;
+  const std::string src = charfix::write_temp("split_skin.glb", charfix::skinned_glb(so));
+  const Character one = load_gltf(charfix::write_temp("one_skin.glb", charfix::skinned_glb()));
+  const Character ch = load_gltf(src);
+  REQUIRE(ch.mesh.num_vertices() == one.mesh.num_vertices());
+  CHECK(max_abs_diff(ch.mesh.positions, one.mesh.positions) < 1e-5f);
+  CHECK(ch.mesh.triangles == one.mesh.triangles);
+  CHECK(ch.mesh.weights.joint == one.mesh.weights.joint);
+  REQUIRE(ch.skeleton.num_joints() == 3);
+  for (int j = 0; j < 3; ++j)
+    for (int e = 0; e < 16; ++e) CHECK(ch.skeleton.inverse_bind[j][e] == Approx(one.skeleton.inverse_bind[j][e]).margin(1e-6));
+  // The reference is the skin binding the most vertices (the tube's): its
+  // primitive needs no map, the box's is box_to_bind().
+  REQUIRE(ch.primitives.size() == 2);
+  CHECK(ch.primitives[0].to_bind == mat4_identity());
+  for (int e = 0; e < 16; ++e) CHECK(ch.primitives[1].to_bind[e] == Approx(charfix::box_to_bind()[e]).margin(1e-6));
+  CHECK(max_abs_diff(linear_blend_skinning(ch.mesh, skinning_matrices(ch.skeleton, bind_pose(ch.skeleton))),
+                     ch.mesh.positions) < 1e-5f);
+
+  SECTION("new weights on a joint the box's skin lacks: its matrix is written in the box's space") {
+    SkinWeights w;
+    w.ptr = {0};
+    for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) {
+      const bool box = ch.mesh.positions[3 * v] >= 0.5f - 1e-5f;
+      for (std::int64_t k = ch.mesh.weights.ptr[v]; k < ch.mesh.weights.ptr[v + 1]; ++k)
+        if (!box) w.joint.push_back(ch.mesh.weights.joint[k]), w.weight.push_back(ch.mesh.weights.weight[k]);
+      if (box) w.joint.insert(w.joint.end(), {1, 2}), w.weight.insert(w.weight.end(), {0.5f, 0.5f});  // helper: new to it
+      w.ptr.push_back(static_cast<std::int64_t>(w.joint.size()));
+    }
+    const auto out = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "split_skin_out.glb").string();
+    save_gltf_with_weights(src, ch, w, out);
+    const Character back = load_gltf(out);
+    REQUIRE(back.mesh.num_vertices() == ch.mesh.num_vertices());
+    CHECK(max_abs_diff(back.mesh.positions, ch.mesh.positions) < 1e-5f);
+    CHECK(back.mesh.weights.joint == w.joint);
+    for (int j = 0; j < 3; ++j)
+      for (int e = 0; e < 16; ++e)
+        CHECK(back.skeleton.inverse_bind[j][e] == Approx(ch.skeleton.inverse_bind[j][e]).margin(1e-6));
+  }
+  SECTION("morph-target frames go back through the box's map and read back") {
+    BakedFrames baked;
+    baked.fps = 10.0f;
+    for (int f = 0; f < 3; ++f) {
+      std::vector<float> p = ch.mesh.positions;
+      for (std::size_t i = 0; i < p.size(); ++i) p[i] += 0.01f * float(f + 1) * float(1 + i % 3);
+      baked.positions.push_back(p);
+    }
+    const auto glb = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "split_skin_baked.glb").string();
+    save_gltf_morph_animation(src, ch, baked, glb);
+    for (const Character& c : {ch, load_gltf(glb)}) {
+      const TargetFrames t = read_target_frames(c, glb);
+      REQUIRE(t.positions.size() == baked.positions.size());
+      for (std::size_t f = 0; f < t.positions.size(); ++f) CHECK(max_abs_diff(t.positions[f], baked.positions[f]) < 1e-5f);
+    }
+  }
 }
 
 TEST_CASE("glTF export keeps a real character's content", "[character][gltf][export][data]") {

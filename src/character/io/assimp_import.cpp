@@ -258,7 +258,7 @@ Character load_assimp_character(const std::string& path, const ImportOptions& op
     }
     ch.primitives.push_back({static_cast<std::int32_t>(mi), 0, -1,
                              mesh->mName.length ? mesh->mName.C_Str() : "mesh" + std::to_string(mi), base,
-                             static_cast<std::int64_t>(mesh->mNumVertices)});
+                             static_cast<std::int64_t>(mesh->mNumVertices), to_common});
   }
   for (std::size_t v = 0; v < infl.size(); ++v)
     if (infl[v].empty()) fail("file vertex ", v, " has no non-zero skin weight");

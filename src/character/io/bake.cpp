@@ -112,12 +112,18 @@ void save_gltf_morph_animation(const std::string& source_path, const Character& 
                         sp.first_vertex + sp.num_vertices <= ch.num_file_vertices(),
                     source_path, ": mesh ", mesh_id, " primitive ", p, " has ", count, " vertices, the character ",
                     sp.num_vertices);
+      // With the joints at their bind transforms a viewer shows the
+      // primitive's positions through to_bind: targets go back through it.
+      const bool own_space = sp.to_bind != mat4_identity();
+      const Mat4 from_bind = own_space ? inverse(sp.to_bind) : mat4_identity();
       for (std::size_t f = 0; f < F; ++f) {
         const std::vector<float>& w = frames.positions[f];
         std::vector<float> d(3 * count);
         for (std::size_t i = 0; i < count; ++i) {
           const std::size_t v = static_cast<std::size_t>(ch.welded_from_file[static_cast<std::size_t>(sp.first_vertex) + i]);
-          for (int c = 0; c < 3; ++c) d[3 * i + c] = w[3 * v + c] - base[3 * i + c];
+          Vec3 t{w[3 * v], w[3 * v + 1], w[3 * v + 2]};
+          if (own_space) t = transform_point(from_bind, t);
+          for (int c = 0; c < 3; ++c) d[3 * i + c] = t[c] - base[3 * i + c];
         }
         prim.targets.push_back({{"POSITION", gltf_util::append_vec3(model, d)}});
       }

@@ -1,6 +1,7 @@
 #include "gatcore/character/io/gltf.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -273,36 +274,85 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
     sk.inverse_bind.push_back(Mat4{});
     ch.joint_nodes.push_back(n);
   }
-  std::vector<char> has_ibm(J, 0);
-  std::vector<std::vector<int>> skin_joint(model.skins.size());  // skin-local -> skeleton joint
+  // Each skin maps its own mesh space to the joints. Exporters write one skin
+  // per object, its inverse bind matrices relative to that object's
+  // transform (Blender does), so one joint can have different matrices in
+  // different skins; taking the first skin's for every mesh leaves the
+  // others' vertices off their bones. The character has one bind space: that
+  // of the skin binding the most vertices. Every other skin's meshes are
+  // brought into it through the joints it shares (skin_to_bind), and its
+  // other joints' matrices are expressed in it.
+  std::vector<std::vector<Mat4>> skin_ibm(model.skins.size());
   for (std::size_t s = 0; s < model.skins.size(); ++s) {
     const auto& skin = model.skins[s];
-    std::vector<float> ibm;
-    if (skin.inverseBindMatrices >= 0) {
-      ibm = rd.floats(skin.inverseBindMatrices, 16, "skin " + std::to_string(s) + " inverseBindMatrices");
-      if (ibm.size() != 16 * skin.joints.size())
-        rd.fail("skin ", s, " has ", ibm.size() / 16, " inverse bind matrices for ", skin.joints.size(), " joints");
-    }
+    skin_ibm[s].assign(skin.joints.size(), mat4_identity());
+    if (skin.inverseBindMatrices < 0) continue;
+    const std::vector<float> ibm =
+        rd.floats(skin.inverseBindMatrices, 16, "skin " + std::to_string(s) + " inverseBindMatrices");
+    if (ibm.size() != 16 * skin.joints.size())
+      rd.fail("skin ", s, " has ", ibm.size() / 16, " inverse bind matrices for ", skin.joints.size(), " joints");
     for (std::size_t k = 0; k < skin.joints.size(); ++k) {
-      const int j = joint_of_node[skin.joints[k]];
-      skin_joint[s].push_back(j);
-      if (has_ibm[j]) continue;
-      has_ibm[j] = 1;
-      if (ibm.empty()) {
-        sk.inverse_bind[j] = mat4_identity();
-      } else {
-        std::copy(ibm.begin() + 16 * k, ibm.begin() + 16 * (k + 1), sk.inverse_bind[j].begin());
-        // A singular inverse bind matrix (all zeros, a zero scale) has no
-        // bind pose to return to: every skinned vertex would collapse.
-        const Mat4& m = sk.inverse_bind[j];
-        const double det = double(m[0]) * (double(m[5]) * m[10] - double(m[9]) * m[6]) -
-                           double(m[4]) * (double(m[1]) * m[10] - double(m[9]) * m[2]) +
-                           double(m[8]) * (double(m[1]) * m[6] - double(m[5]) * m[2]);
-        if (!(std::abs(det) > 1e-12))
-          rd.fail("skin ", s, " inverse bind matrix ", k, " (joint '", sk.names[j],
-                  "') is not invertible (determinant ", det, ")");
+      Mat4& m = skin_ibm[s][k];
+      std::copy(ibm.begin() + 16 * k, ibm.begin() + 16 * (k + 1), m.begin());
+      // A singular inverse bind matrix (all zeros, a zero scale) has no
+      // bind pose to return to: every skinned vertex would collapse.
+      const double det = double(m[0]) * (double(m[5]) * m[10] - double(m[9]) * m[6]) -
+                         double(m[4]) * (double(m[1]) * m[10] - double(m[9]) * m[2]) +
+                         double(m[8]) * (double(m[1]) * m[6] - double(m[5]) * m[2]);
+      if (!(std::abs(det) > 1e-12))
+        rd.fail("skin ", s, " inverse bind matrix ", k, " (joint '", model.nodes[skin.joints[k]].name,
+                "') is not invertible (determinant ", det, ")");
+    }
+  }
+  std::vector<std::int64_t> skin_vertices(model.skins.size(), 0);
+  for (const auto& node : model.nodes) {
+    if (node.skin < 0 || node.skin >= static_cast<int>(model.skins.size()) || node.mesh < 0 ||
+        node.mesh >= static_cast<int>(model.meshes.size()))
+      continue;  // reported when the meshes are read
+    for (const auto& prim : model.meshes[node.mesh].primitives) {
+      const auto it = prim.attributes.find("POSITION");
+      if (it != prim.attributes.end() && it->second >= 0 && it->second < static_cast<int>(model.accessors.size()))
+        skin_vertices[node.skin] += static_cast<std::int64_t>(model.accessors[it->second].count);
+    }
+  }
+  const std::size_t ref_skin = static_cast<std::size_t>(
+      std::max_element(skin_vertices.begin(), skin_vertices.end()) - skin_vertices.begin());
+  std::vector<std::size_t> skin_order{ref_skin};
+  for (std::size_t s = 0; s < model.skins.size(); ++s)
+    if (s != ref_skin) skin_order.push_back(s);
+  std::vector<char> has_ibm(J, 0);
+  std::vector<std::vector<int>> skin_joint(model.skins.size());  // skin-local -> skeleton joint
+  std::vector<Mat4> skin_to_bind(model.skins.size(), mat4_identity());
+  // Per skin and skin joint: the skin's mesh space -> the bind space as that
+  // joint sees it. All equal for a skin bound in the same pose as the
+  // reference; blended per vertex by its weights otherwise.
+  std::vector<std::vector<Mat4>> joint_to_bind(model.skins.size());
+  std::vector<char> skin_moves(model.skins.size(), 0);  // some joint_to_bind is not the identity
+  for (const std::size_t s : skin_order) {
+    const auto& skin = model.skins[s];
+    for (int n : skin.joints) skin_joint[s].push_back(joint_of_node[n]);
+    // (Matrices equal to the reference's give the identity exactly.)
+    const auto to_bind_via = [&](std::size_t k) {
+      const Mat4& ref = sk.inverse_bind[skin_joint[s][k]];
+      return ref == skin_ibm[s][k] ? mat4_identity() : mul(inverse(ref), skin_ibm[s][k]);
+    };
+    for (std::size_t k = 0; k < skin.joints.size() && s != ref_skin; ++k)
+      if (has_ibm[skin_joint[s][k]]) {
+        skin_to_bind[s] = to_bind_via(k);
+        break;
+      }
+    const Mat4 from_bind = inverse(skin_to_bind[s]);
+    joint_to_bind[s].assign(skin.joints.size(), skin_to_bind[s]);
+    for (std::size_t k = 0; k < skin.joints.size(); ++k) {
+      const int j = skin_joint[s][k];
+      if (!has_ibm[j]) {
+        sk.inverse_bind[j] = s == ref_skin ? skin_ibm[s][k] : mul(skin_ibm[s][k], from_bind);
+        has_ibm[j] = 1;
+      } else if (s != ref_skin) {
+        joint_to_bind[s][k] = to_bind_via(k);
       }
     }
+    for (const Mat4& x : joint_to_bind[s]) skin_moves[s] = skin_moves[s] || x != mat4_identity();
   }
   for (int j = 0; j < J; ++j)
     if (!has_ibm[j]) sk.inverse_bind[j] = inverse(node_global[node_of_joint[j]]);
@@ -339,6 +389,10 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
       pos.insert(pos.end(), p.begin(), p.end());
       infl.resize(infl.size() + nv);
       const auto& sj = skin_joint[node.skin];
+      const bool to_bind = skin_moves[node.skin];
+      // Per vertex, its weights' blend of joint_to_bind (skins not the reference).
+      std::vector<std::array<double, 16>> blend(to_bind ? nv : 0, std::array<double, 16>{});
+      std::vector<double> blend_sum(to_bind ? nv : 0, 0.0);
       for (int set = 0; attr("JOINTS_" + std::to_string(set)) >= 0; ++set) {
         const std::string js = "JOINTS_" + std::to_string(set), ws = "WEIGHTS_" + std::to_string(set);
         if (attr(ws) < 0) rd.fail(what, " has ", js, " but no ", ws);
@@ -356,7 +410,20 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
               rd.fail(what, " vertex ", v, " has weight ", w, " on joint ", jv[4 * v + c], " but skin ", node.skin,
                       " has only ", sj.size(), " joints");
             infl[base + v].push_back({sj[jv[4 * v + c]], w});
+            if (to_bind) {
+              const Mat4& x = joint_to_bind[node.skin][jv[4 * v + c]];
+              for (int r = 0; r < 16; ++r) blend[v][r] += double(w) * x[r];
+              blend_sum[v] += w;
+            }
           }
+      }
+      for (std::size_t v = 0; v < blend.size(); ++v) {
+        if (!(blend_sum[v] > 0.0)) continue;  // no weight: refused below
+        float* q = &pos[3 * (base + v)];
+        const double x = q[0], y = q[1], z = q[2];
+        const auto& b = blend[v];
+        for (int r = 0; r < 3; ++r)  // column-major: m[col * 4 + row]
+          q[r] = static_cast<float>((b[r] * x + b[4 + r] * y + b[8 + r] * z + b[12 + r]) / blend_sum[v]);
       }
       std::vector<std::uint32_t> idx;
       if (prim.indices >= 0) {
@@ -382,7 +449,7 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
       }
       ch.primitives.push_back({node.mesh, static_cast<std::int32_t>(pi), n,
                                node.name.empty() ? "Node_" + std::to_string(n) : node.name, base,
-                               static_cast<std::int64_t>(nv)});
+                               static_cast<std::int64_t>(nv), skin_to_bind[node.skin]});
     }
   }
   if (ch.primitives.empty()) rd.fail("no skinned mesh: no node has both a mesh with triangles and a skin");

@@ -44,7 +44,6 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
     top[v].assign(static_cast<std::size_t>(K), std::pair{0, 0.0f});
     for (std::size_t k = 0; k < l.size(); ++k) top[v][k] = {l[k].second, l[k].first / sum};
   }
-  std::map<int, int> new_ibm;  // skin -> accessor, rewritten once per skin
   for (const SourcePrimitive& sp : ch.primitives) {
     GATCORE_CHECK(sp.node >= 0 && sp.node < static_cast<int>(model.nodes.size()) && sp.mesh >= 0 &&
                       sp.mesh < static_cast<int>(model.meshes.size()),
@@ -76,18 +75,33 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
         wv[K * i + k] = t[k].second;
       }
     }
-    if (skin.joints.size() != before || (skin.inverseBindMatrices < 0 && !new_ibm.count(skin_id))) {
+    if (skin.joints.size() != before) {
+      // The skin's own matrices stay (they may be relative to this mesh, not
+      // to the character's bind space); a joint new to it gets the
+      // character's matrix taken back into this mesh's space.
       std::vector<float> ibm(16 * skin.joints.size());
-      for (std::size_t k = 0; k < skin.joints.size(); ++k) {
+      if (skin.inverseBindMatrices >= 0) {
+        const std::vector<float> old = gltf_util::read_floats(model, skin.inverseBindMatrices, 16,
+                                                              "skin " + std::to_string(skin_id) + " inverseBindMatrices",
+                                                              source_path);
+        GATCORE_CHECK(old.size() == 16 * before, source_path, ": skin ", skin_id, " has ", old.size() / 16,
+                      " inverse bind matrices for ", before, " joints");
+        std::copy(old.begin(), old.end(), ibm.begin());
+      } else {
+        for (std::size_t k = 0; k < before; ++k) {
+          const Mat4 id = mat4_identity();
+          std::copy(id.begin(), id.end(), ibm.begin() + 16 * k);
+        }
+      }
+      for (std::size_t k = before; k < skin.joints.size(); ++k) {
         std::int32_t j = -1;
         for (std::int32_t q = 0; q < J; ++q)
           if (ch.joint_nodes[q] == skin.joints[k]) j = q;
-        const Mat4 m = j >= 0 ? ch.skeleton.inverse_bind[j] : mat4_identity();
+        const Mat4 m = j >= 0 ? mul(ch.skeleton.inverse_bind[j], sp.to_bind) : mat4_identity();
         std::copy(m.begin(), m.end(), ibm.begin() + 16 * k);
       }
       skin.inverseBindMatrices = append_accessor(model, ibm.data(), ibm.size() * 4, TINYGLTF_COMPONENT_TYPE_FLOAT,
                                                  TINYGLTF_TYPE_MAT4, skin.joints.size());
-      new_ibm[skin_id] = skin.inverseBindMatrices;
     }
     auto& prim = model.meshes[sp.mesh].primitives.at(static_cast<std::size_t>(sp.primitive));
     for (int set = 0; prim.attributes.count("JOINTS_" + std::to_string(set)) ||

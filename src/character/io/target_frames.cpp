@@ -190,6 +190,14 @@ TargetFrames read_morph_target_frames(const Character& ch, const std::string& pa
                     " deltas for ", base.size() / 3, " vertices");
       for (std::size_t i = 0; i < base.size(); ++i)
         file[f][3 * static_cast<std::size_t>(sp.first_vertex) + i] = double(base[i]) + double(delta[i]);
+      if (sp.to_bind != mat4_identity()) {  // the primitive's own space -> the character's
+        const Mat4& x = sp.to_bind;
+        for (std::size_t i = 0; i < base.size(); i += 3) {
+          double* q = &file[f][3 * static_cast<std::size_t>(sp.first_vertex) + i];
+          const double a = q[0], b = q[1], c = q[2];
+          for (int r = 0; r < 3; ++r) q[r] = x[r] * a + x[4 + r] * b + x[8 + r] * c + x[12 + r];
+        }
+      }
     }
   }
   TargetFrames out;

@@ -22,6 +22,13 @@ struct SourcePrimitive {
   std::string object;
   std::int64_t first_vertex = 0;
   std::int64_t num_vertices = 0;
+  // The primitive's own mesh space -> the character's bind space (where
+  // Mesh::positions and Skeleton::inverse_bind live). Identity unless the
+  // file binds its meshes with different skins whose inverse bind matrices
+  // differ for the same joint (an exporter writing one skin per object,
+  // relative to that object's transform): exports and morph targets go back
+  // through it.
+  Mat4 to_bind = mat4_identity();
 };
 
 struct Character {
