@@ -299,7 +299,7 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
       const double det = double(m[0]) * (double(m[5]) * m[10] - double(m[9]) * m[6]) -
                          double(m[4]) * (double(m[1]) * m[10] - double(m[9]) * m[2]) +
                          double(m[8]) * (double(m[1]) * m[6] - double(m[5]) * m[2]);
-      if (!(std::abs(det) > 1e-12))
+      if (!(std::abs(det) > 1e-12) || !std::isfinite(det))
         rd.fail("skin ", s, " inverse bind matrix ", k, " (joint '", model.nodes[skin.joints[k]].name,
                 "') is not invertible (determinant ", det, ")");
     }
@@ -328,7 +328,7 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
   // reference; blended per vertex by its weights otherwise.
   std::vector<std::vector<Mat4>> joint_to_bind(model.skins.size());
   std::vector<char> skin_moves(model.skins.size(), 0);  // some joint_to_bind is not the identity
-  for (const std::size_t s : skin_order) {
+  for (const std::size_t s : skin_order) try {
     const auto& skin = model.skins[s];
     for (int n : skin.joints) skin_joint[s].push_back(joint_of_node[n]);
     // (Matrices equal to the reference's give the identity exactly.)
@@ -353,6 +353,8 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
       }
     }
     for (const Mat4& x : joint_to_bind[s]) skin_moves[s] = skin_moves[s] || x != mat4_identity();
+  } catch (const InvalidArgument& e) {  // products of extreme matrices that no longer invert
+    rd.fail("skin ", s, "'s inverse bind matrices do not map into skin ", ref_skin, "'s bind space (", e.what(), ")");
   }
   for (int j = 0; j < J; ++j)
     if (!has_ibm[j]) sk.inverse_bind[j] = inverse(node_global[node_of_joint[j]]);
@@ -422,8 +424,12 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
         float* q = &pos[3 * (base + v)];
         const double x = q[0], y = q[1], z = q[2];
         const auto& b = blend[v];
-        for (int r = 0; r < 3; ++r)  // column-major: m[col * 4 + row]
+        for (int r = 0; r < 3; ++r) {  // column-major: m[col * 4 + row]
           q[r] = static_cast<float>((b[r] * x + b[4 + r] * y + b[8 + r] * z + b[12 + r]) / blend_sum[v]);
+          if (!std::isfinite(q[r]))
+            rd.fail(what, " vertex ", v, " is not finite once brought into the bind space of skin ", ref_skin,
+                    " (skin ", node.skin, "'s inverse bind matrices are extreme)");
+        }
       }
       std::vector<std::uint32_t> idx;
       if (prim.indices >= 0) {
