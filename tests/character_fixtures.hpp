@@ -120,6 +120,7 @@ struct GlbOptions {
   // inverse bind matrices are the tube skin's times that map (as an exporter
   // writing one skin per object does).
   bool split_skin = false;
+  float split_skin_scale = 1.0f;  // scales the split skin's matrices' 3x3 part (0: singular)
 };
 
 // box space -> bind space of split_skin: rotate 90 degrees about z, scale 2,
@@ -204,6 +205,8 @@ inline std::string skinned_glb(const GlbOptions& o = {}) {
   std::vector<float> bibm(x.begin(), x.end());
   bibm.insert(bibm.end(), x.begin(), x.end());
   bibm[13] -= 1.0f;  // bone1: translate(0, -1, 0) * x
+  for (int m = 0; m < 2; ++m)
+    for (int e = 0; e < 12; ++e) bibm[16 * m + e] *= o.split_skin_scale;
   const int bIbm = acc(add(bibm.data(), bibm.size() * 4), 5126, 2, "MAT4");
   const std::vector<float> times = {0.0f, 1.0f};
   const float s = std::sin(0.25f * 3.14159265f), c = std::cos(0.25f * 3.14159265f);

@@ -119,6 +119,16 @@ TEST_CASE("glTF import rejects bad files with the file and the problem", "[chara
     CHECK_THROWS_WITH(load_gltf(p), Contains("zero_ibm.glb") && Contains("inverse bind matrix 0") &&
                                         Contains("is not invertible"));
   }
+  SECTION("a singular matrix in a mesh's own skin, for joints another skin also binds") {
+    // Every skin's matrices map its meshes into the bind space: none may be
+    // singular, not only the first one seen per joint.
+    charfix::GlbOptions o;
+    o.split_skin = true;
+    o.split_skin_scale = 0.0f;
+    const std::string p = charfix::write_temp("split_skin_zero.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("split_skin_zero.glb") && Contains("skin 0 inverse bind matrix 0") &&
+                                        Contains("(joint 'bone1') is not invertible"));
+  }
 }
 
 TEST_CASE("glTF import reads external URIs only inside the model's folder", "[character][gltf]") {

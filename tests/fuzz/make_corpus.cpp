@@ -54,6 +54,11 @@ int main(int argc, char** argv) {
   const character::Character ch = character::load_gltf(tube);
   character::save_gltf_character(ch, (out / "gltf" / "tube.glb").string());
   character::save_gltf_character(ch, (out / "gltf" / "tube.gltf").string());
+  // One skin per mesh, each relative to its own mesh (the importer maps them into one bind space).
+  charfix::GlbOptions split;
+  split.split_skin = true;
+  const std::string split_glb = charfix::skinned_glb(split);
+  std::ofstream(out / "gltf" / "split_skin.glb", std::ios::binary).write(split_glb.data(), std::streamsize(split_glb.size()));
 
   // Dataset descriptions (with and without a joint-limit table).
   character::DatasetDescription s;
