@@ -133,7 +133,6 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
   r.vertices = n;
   r.height = 1.0 / static_cast<double>(pc.norm.scale);
   r.weights = weight_metrics(predicted, truth, num_bones, opts.threshold, mask);
-  r.dominant = dominant_accuracy(predicted, truth, num_bones, mask);
   {
     // Bone columns -> the character's joint names.
     std::vector<std::string> bone_name(static_cast<std::size_t>(num_bones));
@@ -145,8 +144,13 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
       const std::string& s = bone_name[static_cast<std::size_t>(b)];
       return s.empty() ? "bone " + std::to_string(b) : s;
     };
-    for (const auto& [t, p, c] : dominant_confusions(predicted, truth, num_bones, mask))
+    // One pass for both: the dominant bone is right wherever it is not confused.
+    std::int64_t wrong = 0;
+    for (const auto& [t, p, c] : dominant_confusions(predicted, truth, num_bones, mask)) {
       r.confusions.push_back({name(t), name(p), c});
+      wrong += c;
+    }
+    r.dominant = n > 0 ? static_cast<double>(n - wrong) / static_cast<double>(n) : 0.0;
   }
   r.vertex_l1.resize(static_cast<std::size_t>(n));
   for (std::int64_t v = 0; v < n; ++v) {
