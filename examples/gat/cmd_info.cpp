@@ -3,6 +3,7 @@
 // model configuration and training state). Bad files exit non-zero with the
 // reason.
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <cstdio>
 #include <cstring>
@@ -45,6 +46,25 @@ void print_character(const Character& ch) {
   std::printf("character  %s\n", ch.name.c_str());
   std::printf("vertices   %lld welded (%lld in the file, %zu primitives)\n", static_cast<long long>(m.num_vertices()),
               static_cast<long long>(ch.num_file_vertices()), ch.primitives.size());
+  // Files that bind each mesh with its own skin, whose inverse bind matrices
+  // disagree for the same joint (one skin per object, relative to the
+  // object): the importer maps those meshes into one bind space. Said here
+  // because it is the first thing to suspect when weights or bind poses
+  // look off in another tool.
+  {
+    const Mat4 id = mat4_identity();
+    int mapped = 0;
+    double worst = 0;
+    for (const SourcePrimitive& p : ch.primitives) {
+      double d = 0;
+      for (int i = 0; i < 16; ++i) d = std::max(d, std::abs(double(p.to_bind[i]) - double(id[i])));
+      if (d > 1e-5) ++mapped, worst = std::max(worst, d);
+    }
+    if (mapped)
+      std::printf("bind space %d of %zu primitives are bound by a skin whose inverse bind matrices differ from the "
+                  "character's (largest matrix entry change %.3g): mapped into one bind space\n",
+                  mapped, ch.primitives.size(), worst);
+  }
   std::printf("triangles  %lld\n", static_cast<long long>(m.num_triangles()));
   std::printf("components %d\n", comp.count);
   std::vector<int> weighted(static_cast<std::size_t>(s.num_joints()), 0);
