@@ -39,8 +39,23 @@ inline void for_each_row(std::int64_t rows, std::int64_t cols, F&& f) {
 //   add_row(r, acc): adds row r's contribution into acc[0, width) (double).
 // Returns sums [S * width] in double: sums[s*width + k] = Σ_{r in s} contribution_k(r),
 // computed as Σ over blocks (in order) of the block partials.
+// The same blocks, for a kernel that sums a whole block at a time:
+// add_rows(begin, end, acc) adds rows [begin, end) of one block (at most
+// kReduceBlockRows, never across a segment) into acc[0, width).
+template <class AddRows>
+std::vector<double> segmented_column_block_sums(std::span<const std::int64_t> seg, std::int64_t width,
+                                                AddRows&& add_rows);
+
 template <class AddRow>
 std::vector<double> segmented_column_sums(std::span<const std::int64_t> seg, std::int64_t width, AddRow&& add_row) {
+  return segmented_column_block_sums(seg, width, [&](std::int64_t begin, std::int64_t end, double* acc) {
+    for (std::int64_t r = begin; r < end; ++r) add_row(r, acc);
+  });
+}
+
+template <class AddRows>
+std::vector<double> segmented_column_block_sums(std::span<const std::int64_t> seg, std::int64_t width,
+                                                AddRows&& add_rows) {
   const std::int64_t S = static_cast<std::int64_t>(seg.size()) - 1;
   std::vector<double> out(static_cast<std::size_t>(std::max<std::int64_t>(S, 0) * width), 0.0);
   if (S <= 0 || width <= 0) return out;
@@ -59,7 +74,7 @@ std::vector<double> segmented_column_sums(std::span<const std::int64_t> seg, std
   for (std::int64_t k = 0; k < nb; ++k) {
     double* acc = partial.data() + k * width;
     for (std::int64_t c = 0; c < width; ++c) acc[c] = 0.0;
-    for (std::int64_t r = blocks[k].begin; r < blocks[k].end; ++r) add_row(r, acc);
+    add_rows(blocks[k].begin, blocks[k].end, acc);
   }
   for (std::int64_t k = 0; k < nb; ++k) {
     double* dst = out.data() + blocks[k].seg * width;
@@ -75,6 +90,13 @@ template <class AddRow>
 std::vector<double> column_sums(std::int64_t rows, std::int64_t width, AddRow&& add_row) {
   const std::int64_t seg[2] = {0, rows};
   return segmented_column_sums(std::span<const std::int64_t>(seg, 2), width, static_cast<AddRow&&>(add_row));
+}
+
+// Column sums over all rows [0, rows), a block at a time.
+template <class AddRows>
+std::vector<double> column_block_sums(std::int64_t rows, std::int64_t width, AddRows&& add_rows) {
+  const std::int64_t seg[2] = {0, rows};
+  return segmented_column_block_sums(std::span<const std::int64_t>(seg, 2), width, static_cast<AddRows&&>(add_rows));
 }
 
 // Shape string "[r, c]" for messages.

@@ -232,17 +232,25 @@ TEST_CASE("a short training run drives each model's loss well below its untraine
     TrainOptions o = TrainOptions::defaults_for(cfg);
     o.sampling = Sampling::full;
     o.batch_size = 2;
-    o.lr = 3e-3f;
+    // Without dense connections 18 tanhshrink blocks are chained and the
+    // gradient reaching the early blocks is small: it learns, but slowly and
+    // noisily (epoch-to-epoch swings of 2x at lr 3e-3, so its last epoch
+    // alone passed or failed with the rounding of a BatchNorm sum). It gets
+    // lr 1e-3, 80 epochs, and the mean of its last 10 epochs is checked.
+    const bool nodense = name == "densegats-nodense";
+    o.lr = nodense ? 1e-3f : 3e-3f;
     o.seed = 1;
     Trainer t(*m, o, norm);
     // Training-mode losses (batch statistics): eval-mode BatchNorm lags
     // behind while its running statistics converge (momentum 0.1).
     const double before = t.run_epoch(data).train_loss;
-    double after = before;
-    for (int e = 1; e < 25; ++e) after = t.run_epoch(data).train_loss;
+    const int epochs = nodense ? 80 : 25, last = nodense ? 10 : 1;
+    double after = 0;
+    for (int e = 1; e < epochs; ++e) {
+      const double l = t.run_epoch(data).train_loss;
+      if (e >= epochs - last) after += l / last;
+    }
     INFO(name << ": loss " << before << " -> " << after << " in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s");
-    // Without dense connections 18 tanhshrink blocks are chained and the
-    // gradient reaching the early blocks is small: it learns, but slowly.
-    CHECK(after < (name == "densegats-nodense" ? 0.7 : 0.3) * before);
+    CHECK(after < (nodense ? 0.7 : 0.3) * before);
   }
 }
