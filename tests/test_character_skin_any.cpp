@@ -4,7 +4,9 @@
 // prediction that depends on no joint name (inference/weight_prediction.hpp).
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "character_fixtures.hpp"
@@ -229,6 +231,98 @@ TEST_CASE("skinweights-any predicts the same weights whatever the joints are cal
   // Another model is refused, naming it.
   auto other = models::make_model(models::ModelConfig::defaults("fc", bone_candidate_feature_dim(k), k), 1);
   CHECK_THROWS_AS(predict_skin_weights_any(*other, norm, original, 3), InvalidArgument);
+}
+
+namespace {
+// The same character in centimetres, somewhere else: what an FBX from
+// Mixamo or an Unreal export is next to a glTF in metres. Bind space, joint
+// bind matrices and the roots' rest transforms all move by m; the joints'
+// local transforms are relative and stay.
+Character moved_and_scaled(const Character& c, float s, Vec3 t) {
+  Mat4 m = mat4_identity();
+  m[0] = m[5] = m[10] = s;
+  m[12] = t[0];
+  m[13] = t[1];
+  m[14] = t[2];
+  const Mat4 inv = inverse(m);
+  Character out = c;
+  for (std::size_t i = 0; i + 2 < out.mesh.positions.size(); i += 3) {
+    const Vec3 p = transform_point(m, {c.mesh.positions[i], c.mesh.positions[i + 1], c.mesh.positions[i + 2]});
+    out.mesh.positions[i] = p[0];
+    out.mesh.positions[i + 1] = p[1];
+    out.mesh.positions[i + 2] = p[2];
+  }
+  for (std::int32_t j = 0; j < out.skeleton.num_joints(); ++j) {
+    out.skeleton.inverse_bind[std::size_t(j)] = mul(c.skeleton.inverse_bind[std::size_t(j)], inv);
+    if (out.skeleton.parents[std::size_t(j)] < 0)
+      out.skeleton.root_parent[std::size_t(j)] = mul(m, c.skeleton.root_parent[std::size_t(j)]);
+  }
+  return out;
+}
+
+void check_same_weights(const SkinWeights& a, const SkinWeights& b, double tol) {
+  REQUIRE(a.num_vertices() == b.num_vertices());
+  int differ = 0;
+  double worst = 0;
+  for (std::int64_t v = 0; v < a.num_vertices(); ++v) {
+    std::map<std::int32_t, double> w;
+    for (std::int64_t e = a.ptr[v]; e < a.ptr[v + 1]; ++e) w[a.joint[e]] += a.weight[e];
+    for (std::int64_t e = b.ptr[v]; e < b.ptr[v + 1]; ++e) w[b.joint[e]] -= b.weight[e];
+    double d = 0;
+    for (const auto& [j, x] : w) d += std::abs(x);
+    worst = std::max(worst, d);
+    if (d > tol) ++differ;
+  }
+  INFO("largest per-vertex L1 difference " << worst);
+  CHECK(differ == 0);
+}
+}  // namespace
+
+TEST_CASE("skinweights-any and bone heat give the same weights in centimetres and moved", "[skin_any]") {
+  ProceduralOptions o;
+  o.seed = 7;
+  o.ring_segments = 8;
+  o.rings_per_bone = 3;
+  // Jittered by up to 2 mm: the procedural rings sit exactly on the joints,
+  // where two bones tie for nearest and float noise picks the winner (in
+  // any frame, scaled or not); a scanned or sculpted mesh has no such ties.
+  // Copies of a point along seams move together (the mesh stays closed).
+  Character metres = procedural_character(o);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> J(-2e-3f, 2e-3f);
+  std::map<std::array<float, 3>, std::array<float, 3>> moved;
+  for (std::size_t i = 0; i + 2 < metres.mesh.positions.size(); i += 3) {
+    float* x = &metres.mesh.positions[i];
+    const auto [it, fresh] = moved.try_emplace({x[0], x[1], x[2]}, std::array<float, 3>{});
+    if (fresh) it->second = {x[0] + J(rng), x[1] + J(rng), x[2] + J(rng)};
+    for (int c = 0; c < 3; ++c) x[c] = it->second[std::size_t(c)];
+  }
+  // 13 m away: a float keeps 1e-4 cm there, far below the mesh's detail
+  // (a character kilometres from the origin loses its shape in the file).
+  const Character cm = moved_and_scaled(metres, 100.f, {250.f, -40.f, 1300.f});
+  // The fixture really moved the bind space and the joints with it.
+  const Skeleton& sk = cm.skeleton;
+  REQUIRE(std::abs(cm.mesh.positions[1] - (100.f * metres.mesh.positions[1] - 40.f)) < 1e-2f);
+  REQUIRE(std::abs(inverse(sk.inverse_bind[0])[13] - (100.f * inverse(metres.skeleton.inverse_bind[0])[13] - 40.f)) <
+          1e-2f);
+  const int k = 4;
+  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+  cfg.stage1 = {16, 8};
+  cfg.gc_dims = {8, 8, 8};
+  cfg.global_mlp = {16};
+  cfg.classifier = {16};
+  auto model = models::make_model(cfg, 5);
+  randomise_last_layer(*model, 8);
+  const PreparedCharacter pc = prepare_character(metres, DeltaMushParams{0, 0.5f});
+  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k)}, false);
+  SECTION("skinweights-any") {
+    const WeightPrediction p = predict_skin_weights_any(*model, norm, metres, 3);
+    const WeightPrediction q = predict_skin_weights_any(*model, norm, cm, 3);
+    check_same_weights(p.weights, q.weights, 1e-3);
+  }
+  SECTION("bone heat") {
+    check_same_weights(bone_heat_weights(metres), bone_heat_weights(cm), 1e-3);
+  }
 }
 
 TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates", "[skin_any]") {
