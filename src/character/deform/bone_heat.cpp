@@ -30,11 +30,12 @@ double norm(const V3& a) { return std::sqrt(dot(a, a)); }
 V3 to_v3(const Vec3& v) { return {v[0], v[1], v[2]}; }
 
 // Closest point to p on segment [a, b]; *past_tail: p projects beyond b.
-V3 closest_on_segment(const V3& p, const V3& a, const V3& b, bool* past_tail) {
+// *past_tail: how far p lies beyond the tail along the bone (0 if not).
+V3 closest_on_segment(const V3& p, const V3& a, const V3& b, double* past_tail) {
   const V3 ab = sub(b, a);
   const double l2 = dot(ab, ab);
   const double t0 = l2 > 0 ? dot(sub(p, a), ab) / l2 : 0.0;
-  *past_tail = l2 > 0 && t0 >= 1.0;
+  *past_tail = l2 > 0 && t0 > 1.0 ? (t0 - 1.0) * std::sqrt(l2) : 0.0;
   const double t = std::clamp(t0, 0.0, 1.0);
   return {a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
 }
@@ -412,24 +413,46 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   std::vector<std::vector<std::pair<std::int32_t, double>>> target(static_cast<std::size_t>(m));
   std::vector<double> nearest_any(static_cast<std::size_t>(m));
   std::vector<std::vector<std::pair<std::int32_t, double>>> target_any(static_cast<std::size_t>(m));
+  // Bones that tie for nearest share the vertex (Pinocchio's rule: within a
+  // factor 1 + kTie of the nearest). Past that a bone's share falls linearly
+  // to 0 at 1 + 2 kTie, so that a vertex on an exact tie (an edge loop
+  // snapped to a joint, a procedural ring) gets the same targets whichever
+  // way float rounding tips the distances, in any frame.
+  constexpr double kTie = 1e-4;
   auto ties = [&](const std::vector<std::pair<double, std::int32_t>>& c, std::size_t first, double d,
                   std::vector<std::pair<std::int32_t, double>>& out) {
-    std::vector<std::int32_t> js;
-    for (std::size_t k = first; k < c.size() && c[k].first <= d * 1.0001 + 1e-12 * diag; ++k)
-      if (std::find(js.begin(), js.end(), bones[c[k].second].joint) == js.end()) js.push_back(bones[c[k].second].joint);
-    for (std::int32_t j : js) out.push_back({j, 1.0 / static_cast<double>(js.size())});
+    // Distances under dmin (a vertex on a bone) are all "on it".
+    const double full = std::max(d, dmin) * (1 + kTie), none = std::max(d, dmin) * (1 + 2 * kTie);
+    std::vector<std::pair<std::int32_t, double>> js;
+    double sum = 0;
+    for (std::size_t k = first; k < c.size() && std::max(c[k].first, dmin) < none; ++k) {
+      const double share = std::min(1.0, (none - std::max(c[k].first, dmin)) / (none - full));
+      const std::int32_t j = bones[c[k].second].joint;
+      auto it = std::find_if(js.begin(), js.end(), [&](const auto& e) { return e.first == j; });
+      if (it == js.end()) {
+        js.push_back({j, share});
+        sum += share;
+      } else if (share > it->second) {
+        sum += share - it->second;
+        it->second = share;
+      }
+    }
+    for (const auto& [j, share] : js) out.push_back({j, share / sum});
   };
   std::vector<std::pair<double, std::int32_t>> cand;
   std::vector<V3> closest(bones.size());
   for (std::int32_t v = 0; v < m; ++v) {
     cand.clear();
     for (std::size_t b = 0; b < bones.size(); ++b) {
-      bool past = false;
+      double past = 0;
       closest[b] = closest_on_segment(pos[v], bones[b].a, bones[b].b, &past);
       // Past a bone's tail the vertex is as near to the child's head: the
-      // child (a leaf foot beyond the shin's end) wins the tie.
+      // child (a leaf foot beyond the shin's end) wins the tie. The handicap
+      // grows over the first 1e-3 of the diagonal past the tail, so a vertex
+      // on the joint's plane is not tipped one way or the other by rounding.
       const double d = norm(sub(closest[b], pos[v]));
-      cand.push_back({past ? d * 1.001 + 1e-9 * diag : d, static_cast<std::int32_t>(b)});
+      const double r = std::min(1.0, past / (1e-3 * diag));
+      cand.push_back({d * (1 + 1e-3 * r) + 1e-9 * diag * r, static_cast<std::int32_t>(b)});
     }
     std::sort(cand.begin(), cand.end());
     nearest_any[v] = std::max(cand[0].first, dmin);
