@@ -85,7 +85,7 @@ TEST_CASE("the loss curve and history files gat train writes", "[character][plot
   std::ifstream f(history_csv_path(png));
   std::string line;
   std::getline(f, line);
-  CHECK(line == "epoch,train_loss,val_loss,lr,seconds,val_l1");
+  CHECK(line == "epoch,train_loss,val_loss,lr,seconds,val_l1,val_dominant");
   int rows = 0;
   while (std::getline(f, line)) ++rows;
   CHECK(rows == 30);
@@ -102,14 +102,28 @@ TEST_CASE("the loss curve and history files gat train writes", "[character][plot
   CHECK(back[4].val_l1 < 0);  // not measured: five fields, as older checkpoints hold
   CHECK_THROWS_WITH(parse_history("1:0.5:x", "m.gcm"), Contains("m.gcm") && Contains("'1:0.5:x'"));
   // Skin-weight runs add the validation L1 as a sixth field; both forms read.
-  std::vector<LossRecord> w = {{1, 0.9, 0.8, 1e-3, 2.0, 0.45}, {2, 0.7, 0.75, 1e-3, 2.0, -1}};
+  // and the dominant-bone accuracy as a seventh.
+  std::vector<LossRecord> w = {
+      {1, 0.9, 0.8, 1e-3, 2.0, 0.45, -1}, {2, 0.7, 0.75, 1e-3, 2.0, -1, -1}, {3, 0.6, 0.7, 1e-3, 2.0, 0.4, 0.875}};
   const std::vector<LossRecord> wb = parse_history(format_history(w), "w.gcm");
-  REQUIRE(wb.size() == 2);
+  REQUIRE(wb.size() == 3);
   CHECK(wb[0].val_l1 == Approx(0.45).epsilon(1e-8));
+  CHECK(wb[0].val_dominant < 0);
   CHECK(wb[1].val_l1 < 0);
+  CHECK(wb[2].val_l1 == Approx(0.4).epsilon(1e-8));
+  CHECK(wb[2].val_dominant == Approx(0.875).epsilon(1e-8));
+  write_loss_outputs(w, tmp("w.png"));
+  std::ifstream wf(history_csv_path(tmp("w.png")));
+  std::vector<std::string> wl;
+  for (std::string x; std::getline(wf, x);) wl.push_back(x);
+  REQUIRE(wl.size() == 4);
+  CHECK(wl[1] == "1,0.9,0.8,0.001,2,0.45,");
+  CHECK(wl[2] == "2,0.7,0.75,0.001,2,,");
+  CHECK(wl[3] == "3,0.6,0.7,0.001,2,0.4,0.875");
   CHECK(parse_history("3:0.5:0.4:0.001:1.5", "old.gcm")[0].val_l1 < 0);
   CHECK_THROWS_WITH(parse_history("3:0.5:0.4:0.001:1.5:", "m.gcm"), Contains("malformed"));
-  CHECK_THROWS_WITH(parse_history("3:0.5:0.4:0.001:1.5:0.2:7", "m.gcm"), Contains("malformed"));
+  CHECK_THROWS_WITH(parse_history("3:0.5:0.4:0.001:1.5:0.2:7", "m.gcm"), Contains("malformed"));  // a fraction
+  CHECK_THROWS_WITH(parse_history("3:0.5:0.4:0.001:1.5:0.2:0.7:1", "m.gcm"), Contains("malformed"));
   CHECK_THROWS_WITH(parse_history("3:0.5:0.4:0.001:1.5x", "m.gcm"), Contains("malformed"));
   CHECK_THROWS_WITH(write_loss_outputs(h, tmp("no_dir/c.png")), Contains("c.csv"));
 }

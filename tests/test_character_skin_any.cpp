@@ -4,6 +4,7 @@
 // prediction that depends on no joint name (inference/weight_prediction.hpp).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
@@ -15,6 +16,7 @@
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/eval/metrics.hpp"
+#include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
 #include "gatcore/error.hpp"
@@ -455,6 +457,16 @@ TEST_CASE("skinweights-any's validation L1 is gat eval's L1 over the character's
   }
   const double want = weight_metrics(pd, td, J).l1_mean;
   CHECK(l1 == Approx(want).epsilon(1e-5));
+  // The dominant bone likewise: gat eval's over the joints, including the
+  // vertices whose artist's largest weight is on a joint that is not a
+  // candidate (wrong whatever the model says).
+  const int outside = int(std::count(s.target_dominant.begin(), s.target_dominant.end(), -1));
+  INFO(outside << " vertices whose dominant joint is not a candidate");
+  CHECK(outside > 0);
+  const double dom = t.validate({s}).dominant;
+  CHECK(dom == Approx(dominant_accuracy(pd, td, J)).epsilon(1e-12));
+  CHECK(dom > 0.05);
+  CHECK(dom < 1.0);
   // Without the mass the figure is the candidates' only, and lower: the test
   // tells the two apart.
   models::Sample candidates_only = s;

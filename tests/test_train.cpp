@@ -225,26 +225,37 @@ TEST_CASE("validation of a skin-weight model reports the top-4 weights' L1 besid
   const Normaliser norm = Normaliser::fit(train, false);
   Trainer t(*m, o, norm);
   const EpochStats st = t.run_epoch(train, val);
-  double want = 0;
+  double want = 0, want_dominant = 0;
   for (const Sample& s : val) {
     const Tensor w = predict(*m, s, norm, kEvaluationInfluences);
     double sum = 0;
+    std::int64_t right = 0;
     for (std::int64_t i = 0; i < w.rows(); ++i) {
       int nonzero = 0;
+      std::int64_t pw = 0, pt = 0;
       for (std::int64_t j = 0; j < w.cols(); ++j) {
         sum += std::abs(double(w.at(i, j)) - double(s.target.at(i, j)));
         nonzero += w.at(i, j) > 0.f;
+        if (w.at(i, j) > w.at(i, pw)) pw = j;
+        if (s.target.at(i, j) > s.target.at(i, pt)) pt = j;
       }
       CHECK(nonzero <= kEvaluationInfluences);
+      right += pw == pt;
     }
     want += sum / double(w.rows()) / double(val.size());
+    want_dominant += double(right) / double(w.rows()) / double(val.size());
   }
+  // The dominant bone: the largest predicted weight on the target's largest.
+  CHECK(st.val_dominant == Approx(want_dominant).epsilon(1e-12));
+  CHECK(st.val_dominant > 0.0);
+  CHECK(st.val_dominant < 1.0);
   REQUIRE(st.val_l1 >= 0);
   CHECK(st.val_l1 == Approx(want).epsilon(1e-5));
   CHECK(st.val_l1 > 0.05);  // 6 bones, targets spread over more than 4 of them: not 0 by accident
   const Evaluation e = t.validate(val);
   CHECK(e.loss == Approx(st.val_loss).epsilon(1e-9));
   CHECK(e.weight_l1 == Approx(st.val_l1).epsilon(1e-9));
+  CHECK(e.dominant == st.val_dominant);
   CHECK(t.evaluate(val) == e.loss);
 
   // Displacement models have no L1: -1, and the epoch reports none.
@@ -256,5 +267,7 @@ TEST_CASE("validation of a skin-weight model reports the top-4 weights' L1 besid
   TrainOptions od = TrainOptions::defaults_for(d);
   od.sample_vertices = 25;
   Trainer td(*md, od, Normaliser::fit(dtrain, true));
-  CHECK(td.run_epoch(dtrain, {fixtures::wave_sample(7, 6, 1.f, false)}).val_l1 == -1);
+  const EpochStats ds = td.run_epoch(dtrain, {fixtures::wave_sample(7, 6, 1.f, false)});
+  CHECK(ds.val_l1 == -1);
+  CHECK(ds.val_dominant == -1);
 }

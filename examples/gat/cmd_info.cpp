@@ -225,12 +225,17 @@ void print_model(const std::string& path) {
       std::printf("loss       %zu epochs recorded; last: train %.6g", h.size(), h.back().train);
       if (h.back().val >= 0) std::printf(", validation %.6g", h.back().val);
       if (h.back().val_l1 >= 0) std::printf(", validation L1 %.4f", h.back().val_l1);
+      if (h.back().val_dominant >= 0) std::printf(", dominant bone right on %.1f %%", 100.0 * h.back().val_dominant);
       std::printf("\n");
       // Skin-weight runs: the epoch a --keep-best-by l1 checkpoint holds.
       const LossRecord* best = nullptr;
       for (const LossRecord& r : h)
         if (r.val_l1 >= 0 && (!best || r.val_l1 < best->val_l1)) best = &r;
-      if (best) std::printf("           lowest validation L1 %.4f at epoch %d\n", best->val_l1, best->epoch);
+      if (best) {
+        std::printf("           lowest validation L1 %.4f at epoch %d", best->val_l1, best->epoch);
+        if (best->val_dominant >= 0) std::printf(" (dominant bone right on %.1f %%)", 100.0 * best->val_dominant);
+        std::printf("\n");
+      }
     }
   }
 }

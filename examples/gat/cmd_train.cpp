@@ -566,7 +566,7 @@ int run_train(TrainArgs a) {
     const bool last = trainer.epoch() + 1 >= epochs;
     const bool validate = last || (trainer.epoch() + 1) % val_every == 0;
     const EpochStats st = trainer.run_epoch(train, validate ? val : std::vector<Sample>{}, progress);
-    history.push_back({st.epoch, st.train_loss, st.val_loss, double(st.lr), st.seconds, st.val_l1});
+    history.push_back({st.epoch, st.train_loss, st.val_loss, double(st.lr), st.seconds, st.val_l1, st.val_dominant});
     extra["loss_history"] = gatcore::character::format_history(history);
     if (root) {  // every rank holds the same model; one writes it
       save_checkpoint(out, *model, norm, &trainer, extra);
@@ -580,9 +580,10 @@ int run_train(TrainArgs a) {
       if (root) save_checkpoint(keep_best, *model, norm, &trainer, extra);
     }
     if (tty) std::fprintf(stderr, "\r\033[K");
-    char val_text[64] = "-";
+    char val_text[96] = "-";
     if (st.val_loss >= 0 && st.val_l1 >= 0)
-      std::snprintf(val_text, sizeof val_text, "%.6f  val L1 %.4f", st.val_loss, st.val_l1);
+      std::snprintf(val_text, sizeof val_text, "%.6f  val L1 %.4f  dominant %.3f", st.val_loss, st.val_l1,
+                    st.val_dominant);
     else if (st.val_loss >= 0)
       std::snprintf(val_text, sizeof val_text, "%.6f", st.val_loss);
     if (root && !quiet)

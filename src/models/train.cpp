@@ -352,6 +352,7 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
     const Evaluation e = validate(val);
     st.val_loss = e.loss;
     st.val_l1 = e.weight_l1;
+    st.val_dominant = e.dominant;
   }
   const float metric = float(st.val_loss >= 0 ? st.val_loss : st.train_loss);
   if (opt_.schedule == Schedule::plateau) {
@@ -426,7 +427,8 @@ Evaluation Trainer::validate(const std::vector<Sample>& samples) {
   // slots and the slots are summed in sample order, on every rank: the same
   // numbers as one process computes.
   const bool weights = model_.config().task == Task::weights;
-  std::vector<double> losses(samples.size(), 0.0), l1(weights ? samples.size() : 0, 0.0);
+  std::vector<double> losses(samples.size(), 0.0), l1(weights ? samples.size() : 0, 0.0),
+      dominant(weights ? samples.size() : 0, 0.0);
   for (std::size_t i = std::size_t(comm_.rank()); i < samples.size(); i += std::size_t(comm_.size())) {
     const Sample& s = samples[i];
     Batch b = make_batch({&s}, {{}}, norm_, model_.pool_sizes());
@@ -440,6 +442,15 @@ Evaluation Trainer::validate(const std::vector<Sample>& samples) {
       GATCORE_CHECK(!partial || (s.target_mass.rows() == w.rows() && s.target_mass.cols() == 1), s.name,
                     ": target_mass is ", s.target_mass.rows(), " x ", s.target_mass.cols(), " for ", w.rows(),
                     " vertices");
+      GATCORE_CHECK(s.target_dominant.empty() || std::int64_t(s.target_dominant.size()) == w.rows(), s.name,
+                    ": target_dominant has ", s.target_dominant.size(), " entries for ", w.rows(), " vertices");
+      const auto argmax = [](const Tensor& x, std::int64_t r) {
+        std::int64_t best = 0;
+        for (std::int64_t c = 1; c < x.cols(); ++c)
+          if (x.at(r, c) > x.at(r, best)) best = c;
+        return best;
+      };
+      std::int64_t right = 0;
       double sum = 0;
       for (std::int64_t r = 0; r < w.rows(); ++r) {
         // The truth is t * m over the target's columns and 1 - m elsewhere,
@@ -447,13 +458,19 @@ Evaluation Trainer::validate(const std::vector<Sample>& samples) {
         const double m = partial ? double(s.target_mass.at(r, 0)) : 1.0;
         for (std::int64_t c = 0; c < w.cols(); ++c) sum += std::abs(double(w.at(r, c)) - m * double(t.at(r, c)));
         sum += 1.0 - m;
+        const std::int64_t truth = s.target_dominant.empty() ? argmax(t, r) : s.target_dominant[std::size_t(r)];
+        right += argmax(w, r) == truth;
       }
       l1[i] = w.rows() > 0 ? sum / double(w.rows()) : 0.0;
+      dominant[i] = w.rows() > 0 ? double(right) / double(w.rows()) : 0.0;
     }
     forget_graphs(b, model_.device());
   }
   comm_.sum(losses.data(), losses.size());
-  if (weights) comm_.sum(l1.data(), l1.size());
+  if (weights) {
+    comm_.sum(l1.data(), l1.size());
+    comm_.sum(dominant.data(), dominant.size());
+  }
   Evaluation e;
   for (double l : losses) e.loss += l;
   e.loss = samples.empty() ? 0.0 : e.loss / double(samples.size());
@@ -461,6 +478,9 @@ Evaluation Trainer::validate(const std::vector<Sample>& samples) {
     e.weight_l1 = 0;
     for (double v : l1) e.weight_l1 += v;
     e.weight_l1 = samples.empty() ? 0.0 : e.weight_l1 / double(samples.size());
+    e.dominant = 0;
+    for (double v : dominant) e.dominant += v;
+    e.dominant = samples.empty() ? 0.0 : e.dominant / double(samples.size());
   }
   return e;
 }

@@ -30,6 +30,12 @@ struct Sample {
   // renormalised. Trainer::validate's L1 then counts the rest as error, so
   // it equals the L1 over the character's joints (gat eval's). Absent: 1.
   Tensor target_mass;
+  // Optional, per vertex: the target column of the artist's dominant joint,
+  // -1 where no column holds it (skinweights-any: a vertex whose largest
+  // weight is on a joint outside its candidates). Trainer::validate's
+  // dominant-bone accuracy then matches gat eval's. Absent: the largest
+  // target column of the row.
+  std::vector<std::int32_t> target_dominant;
 };
 
 // Per-column feature normalisation (z-score) and a scalar target scale for

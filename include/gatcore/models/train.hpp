@@ -114,6 +114,7 @@ struct EpochStats {
   // Skin-weight models: validation's mean per-vertex L1 of the top-4
   // renormalised weights (Evaluation::weight_l1); -1 otherwise.
   double val_l1 = -1;
+  double val_dominant = -1;  // and the fraction of vertices whose dominant bone is right (Evaluation::dominant)
   float lr = 0;
   std::int64_t batches = 0, samples = 0;
   double seconds = 0;
@@ -137,6 +138,11 @@ struct Evaluation {
   // error: skinweights-any's L1 is over the character's joints, as gat
   // eval's). -1 for displacements.
   double weight_l1 = -1;
+  // Task::weights: per sample the fraction of vertices whose largest
+  // predicted weight is on the artist's dominant joint (Sample::
+  // target_dominant, else the largest target column; ties: the first
+  // column), averaged over the samples as weight_l1. -1 for displacements.
+  double dominant = -1;
 };
 inline constexpr int kEvaluationInfluences = 4;
 

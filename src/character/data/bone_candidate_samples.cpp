@@ -9,6 +9,7 @@ models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, BoneCan
   m.features = c.features;
   m.target = candidate_targets(c, pc.character.mesh.weights);
   m.target_mass = candidate_target_mass(c, pc.character.mesh.weights);
+  m.target_dominant = candidate_target_dominant(c, pc.character.mesh.weights);
   m.prior = bone_heat_log_prior(c);
   m.bone_mask = Tensor::zeros(1, k);
   for (int i = 0; i < c.valid; ++i) m.bone_mask.at(0, i) = 1.0f;

@@ -174,6 +174,28 @@ Tensor candidate_target_mass(const BoneCandidates& c, const SkinWeights& w) {
   return m;
 }
 
+std::vector<std::int32_t> candidate_target_dominant(const BoneCandidates& c, const SkinWeights& w) {
+  check_candidate_rows("candidate_target_dominant", c, w);
+  const std::int64_t n = w.num_vertices();
+  std::vector<std::int32_t> out(static_cast<std::size_t>(n), -1);
+  std::vector<std::pair<std::int32_t, double>> row;
+  for (std::int64_t v = 0; v < n; ++v) {
+    row.clear();  // weights per joint (a joint may appear twice in a row)
+    for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e) {
+      auto it = std::find_if(row.begin(), row.end(), [&](const auto& x) { return x.first == w.joint[e]; });
+      if (it == row.end()) row.push_back({w.joint[e], w.weight[e]});
+      else it->second += w.weight[e];
+    }
+    if (row.empty()) continue;
+    std::pair<std::int32_t, double> best = row.front();
+    for (const auto& x : row)
+      if (x.second > best.second || (x.second == best.second && x.first < best.first)) best = x;
+    for (int i = 0; i < c.valid; ++i)
+      if (c.joint[static_cast<std::size_t>(v * c.k + i)] == best.first) out[static_cast<std::size_t>(v)] = i;
+  }
+  return out;
+}
+
 SkinWeights weights_from_candidates(const BoneCandidates& c, const Tensor& p) {
   const std::int64_t n = static_cast<std::int64_t>(c.joint.size()) / std::max(1, c.k);
   GATCORE_CHECK(p.rows() == n && p.cols() == c.k, "weights_from_candidates: ", p.rows(), " x ", p.cols(),

@@ -23,6 +23,10 @@ std::string format_history(const std::vector<LossRecord>& h) {
     if (r.val_l1 >= 0) {
       std::snprintf(b, sizeof b, ":%.9g", r.val_l1);
       s += b;
+      if (r.val_dominant >= 0) {
+        std::snprintf(b, sizeof b, ":%.9g", r.val_dominant);
+        s += b;
+      }
     }
   }
   return s;
@@ -33,12 +37,14 @@ std::vector<LossRecord> parse_history(const std::string& s, const std::string& w
   std::stringstream ss(s);
   for (std::string item; std::getline(ss, item, ';');) {
     LossRecord r;
-    // Five fields, or six with the validation L1, and nothing after them.
-    int end5 = -1, end6 = -1;
-    const int got = std::sscanf(item.c_str(), "%d:%lf:%lf:%lf:%lf%n:%lf%n", &r.epoch, &r.train, &r.val, &r.lr,
-                                &r.seconds, &end5, &r.val_l1, &end6);
+    // Five fields, six with the validation L1, seven with the dominant-bone
+    // accuracy, and nothing after them.
+    int end5 = -1, end6 = -1, end7 = -1;
+    const int got = std::sscanf(item.c_str(), "%d:%lf:%lf:%lf:%lf%n:%lf%n:%lf%n", &r.epoch, &r.train, &r.val, &r.lr,
+                                &r.seconds, &end5, &r.val_l1, &end6, &r.val_dominant, &end7);
     const int len = static_cast<int>(item.size());
-    if (!(got == 5 && end5 == len) && !(got == 6 && end6 == len))
+    if (!(got == 5 && end5 == len) && !(got == 6 && end6 == len) &&
+        !(got == 7 && end7 == len && r.val_dominant >= 0 && r.val_dominant <= 1))
       throw InvalidArgument(what + ": malformed loss history entry '" + item + "'");
     h.push_back(r);
   }
@@ -60,14 +66,16 @@ std::string history_csv_path(const std::string& png) {
 void write_loss_outputs(const std::vector<LossRecord>& h, const std::string& png) {
   const std::string csv = history_csv_path(png);
   {
-    std::string f = "epoch,train_loss,val_loss,lr,seconds,val_l1\n";
-    char b[200], v[40] = "", l1[40] = "";
+    std::string f = "epoch,train_loss,val_loss,lr,seconds,val_l1,val_dominant\n";
+    char b[240], v[40] = "", l1[40] = "", dom[40] = "";
     for (const LossRecord& r : h) {
       if (r.val >= 0) std::snprintf(v, sizeof v, "%.9g", r.val);
       else v[0] = 0;  // no validation set: an empty field
       if (r.val_l1 >= 0) std::snprintf(l1, sizeof l1, "%.9g", r.val_l1);
       else l1[0] = 0;  // not a skin-weight model, or not validated this epoch
-      std::snprintf(b, sizeof b, "%d,%.9g,%s,%.6g,%.4g,%s\n", r.epoch, r.train, v, r.lr, r.seconds, l1);
+      if (r.val_dominant >= 0) std::snprintf(dom, sizeof dom, "%.9g", r.val_dominant);
+      else dom[0] = 0;
+      std::snprintf(b, sizeof b, "%d,%.9g,%s,%.6g,%.4g,%s,%s\n", r.epoch, r.train, v, r.lr, r.seconds, l1, dom);
       f += b;
     }
     write_file_atomic(csv, f);

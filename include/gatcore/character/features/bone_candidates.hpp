@@ -56,6 +56,10 @@ Tensor candidate_targets(const BoneCandidates& c, const SkinWeights& w);
 // candidates hold, 0 where none does (models::Sample::target_mass): with it a
 // validation L1 over the candidates is the L1 over the character's joints.
 Tensor candidate_target_mass(const BoneCandidates& c, const SkinWeights& w);
+// Per vertex, the candidate column of its largest artist weight (ties: the
+// lower joint index, as gat eval's dominant bone), -1 where that joint is not
+// a candidate (models::Sample::target_dominant).
+std::vector<std::int32_t> candidate_target_dominant(const BoneCandidates& c, const SkinWeights& w);
 
 // The log prior of skinweights-any's logits (models::Sample::prior, [n, k]):
 // log(bone heat's weight of the candidate + eps) for the valid candidates, 0

@@ -14,10 +14,12 @@ struct LossRecord {
   double train = 0, val = -1;  // val < 0: no validation set
   double lr = 0, seconds = 0;
   double val_l1 = -1;  // skin-weight models: validation L1 (models::Evaluation); < 0: not measured
+  double val_dominant = -1;  // and the fraction of vertices with the right dominant bone; < 0: not measured
 };
 
-// "epoch:train:val:lr:seconds[:val_l1];..." (checkpoint metadata
-// "loss_history"; val_l1 only where measured, so older checkpoints read the same).
+// "epoch:train:val:lr:seconds[:val_l1[:val_dominant]];..." (checkpoint
+// metadata "loss_history"; the last two only where measured, so older
+// checkpoints read the same).
 std::string format_history(const std::vector<LossRecord>& h);
 // Throws InvalidArgument naming `what` for a malformed string.
 std::vector<LossRecord> parse_history(const std::string& s, const std::string& what);
@@ -26,7 +28,8 @@ std::vector<LossRecord> parse_history(const std::string& s, const std::string& w
 std::string default_curve_path(const std::string& checkpoint);
 // "curve.png" -> "curve.csv" (else the path + ".csv").
 std::string history_csv_path(const std::string& png);
-// Writes the CSV (epoch,train_loss,val_loss,lr,seconds) and the PNG.
+// Writes the CSV (epoch,train_loss,val_loss,lr,seconds,val_l1,val_dominant)
+// and the PNG.
 void write_loss_outputs(const std::vector<LossRecord>& h, const std::string& png);
 
 }  // namespace gatcore::character
