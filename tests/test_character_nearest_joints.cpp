@@ -131,6 +131,34 @@ TEST_CASE("a nearest-joint corrective model deforms any skeleton, whatever its j
     CHECK(out == fb.corrected);
   }
 
+  // The same character in centimetres, 13 m from the origin (an FBX from
+  // Mixamo or Unreal beside a glTF in metres): the columns and the offsets
+  // live in the character's normalised frame, so the corrected mesh is the
+  // metres one in the new units, in gat deform and in the runtime.
+  {
+    const Character cm = posefix::moved_and_scaled(a, 100.f, {250.f, -40.f, 1300.f});
+    const CorrectiveDeformer dm = make_corrective_deformer(cm, bones, {}, scales, 4);
+    runtime::Deformer rm = runtime::Deformer::load(path);
+    rm.bind(cm.mesh, cm.skeleton);
+    for (int f = 0; f < 3; ++f) {
+      const Pose pose = posefix::test_pose(a.skeleton, f);
+      const CorrectedFrame fa = deform_frame(da, *lm.model, lm.norm, pose);
+      const CorrectedFrame fm = deform_frame(dm, *lm.model, lm.norm, posefix::test_pose(cm.skeleton, f));
+      REQUIRE(fm.corrected.size() == fa.corrected.size());
+      const float t[3] = {250.f, -40.f, 1300.f};
+      double worst = 0, corr = 0;
+      for (std::size_t i = 0; i < fa.corrected.size(); ++i) {
+        worst = std::max(worst, std::abs(double(fm.corrected[i]) - (100.0 * fa.corrected[i] + t[i % 3])));
+        corr = std::max(corr, 100.0 * std::abs(fa.corrected[i] - fa.lbs[i]));
+      }
+      INFO("frame " << f << ": largest difference " << worst << " cm, largest correction " << corr << " cm");
+      CHECK(worst < 2e-3);  // a float at 1300 keeps 1.2e-4
+      CHECK(corr > 100 * worst);
+      rm.deform(posefix::globals_of(cm.skeleton, posefix::test_pose(cm.skeleton, f)), out);
+      CHECK(out == fm.corrected);
+    }
+  }
+
   // Another skeleton altogether (two joints: fewer than K, the farthest
   // repeats) binds and deforms.
   const Character c = charfix::tube_character(8, 8, 2.0f, 0.25f, 0.3f);

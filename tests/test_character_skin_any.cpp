@@ -11,6 +11,7 @@
 #include <random>
 
 #include "character_fixtures.hpp"
+#include "pose_fixtures.hpp"
 #include "model_gradcheck.hpp"
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/procedural.hpp"
@@ -236,32 +237,6 @@ TEST_CASE("skinweights-any predicts the same weights whatever the joints are cal
 }
 
 namespace {
-// The same character in centimetres, somewhere else: what an FBX from
-// Mixamo or an Unreal export is next to a glTF in metres. Bind space, joint
-// bind matrices and the roots' rest transforms all move by m; the joints'
-// local transforms are relative and stay.
-Character moved_and_scaled(const Character& c, float s, Vec3 t) {
-  Mat4 m = mat4_identity();
-  m[0] = m[5] = m[10] = s;
-  m[12] = t[0];
-  m[13] = t[1];
-  m[14] = t[2];
-  const Mat4 inv = inverse(m);
-  Character out = c;
-  for (std::size_t i = 0; i + 2 < out.mesh.positions.size(); i += 3) {
-    const Vec3 p = transform_point(m, {c.mesh.positions[i], c.mesh.positions[i + 1], c.mesh.positions[i + 2]});
-    out.mesh.positions[i] = p[0];
-    out.mesh.positions[i + 1] = p[1];
-    out.mesh.positions[i + 2] = p[2];
-  }
-  for (std::int32_t j = 0; j < out.skeleton.num_joints(); ++j) {
-    out.skeleton.inverse_bind[std::size_t(j)] = mul(c.skeleton.inverse_bind[std::size_t(j)], inv);
-    if (out.skeleton.parents[std::size_t(j)] < 0)
-      out.skeleton.root_parent[std::size_t(j)] = mul(m, c.skeleton.root_parent[std::size_t(j)]);
-  }
-  return out;
-}
-
 void check_same_weights(const SkinWeights& a, const SkinWeights& b, double tol) {
   REQUIRE(a.num_vertices() == b.num_vertices());
   int differ = 0;
@@ -301,7 +276,7 @@ TEST_CASE("skinweights-any and bone heat give the same weights in centimetres an
   }
   // 13 m away: a float keeps 1e-4 cm there, far below the mesh's detail
   // (a character kilometres from the origin loses its shape in the file).
-  const Character cm = moved_and_scaled(metres, 100.f, {250.f, -40.f, 1300.f});
+  const Character cm = posefix::moved_and_scaled(metres, 100.f, {250.f, -40.f, 1300.f});
   // The fixture really moved the bind space and the joints with it.
   const Skeleton& sk = cm.skeleton;
   REQUIRE(std::abs(cm.mesh.positions[1] - (100.f * metres.mesh.positions[1] - 40.f)) < 1e-2f);
