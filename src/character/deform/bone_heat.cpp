@@ -29,8 +29,8 @@ V3 cross(const V3& a, const V3& b) {
 double norm(const V3& a) { return std::sqrt(dot(a, a)); }
 V3 to_v3(const Vec3& v) { return {v[0], v[1], v[2]}; }
 
-// Closest point to p on segment [a, b]; *past_tail: p projects beyond b.
-// *past_tail: how far p lies beyond the tail along the bone (0 if not).
+// Closest point to p on segment [a, b]; *past_tail: how far p projects
+// beyond b along the bone (0 if it does not).
 V3 closest_on_segment(const V3& p, const V3& a, const V3& b, double* past_tail) {
   const V3 ab = sub(b, a);
   const double l2 = dot(ab, ab);
