@@ -113,6 +113,7 @@ struct GlbOptions {
   int bad_joint = -1;        // >= 0: vertex 0 gets weight on this skin joint index
   bool nan = false;          // a NaN position
   bool animation = true;
+  float key_times[2] = {0.0f, 1.0f};  // the animation's two key times (s)
   bool second_primitive = true;
   bool zero_ibm = false;     // every inverse bind matrix all zeros (singular)
   // The box on its own node and skin (listed first), stored in its own mesh
@@ -208,7 +209,7 @@ inline std::string skinned_glb(const GlbOptions& o = {}) {
   for (int m = 0; m < 2; ++m)
     for (int e = 0; e < 12; ++e) bibm[16 * m + e] *= o.split_skin_scale;
   const int bIbm = acc(add(bibm.data(), bibm.size() * 4), 5126, 2, "MAT4");
-  const std::vector<float> times = {0.0f, 1.0f};
+  const std::vector<float> times = {o.key_times[0], o.key_times[1]};
   const float s = std::sin(0.25f * 3.14159265f), c = std::cos(0.25f * 3.14159265f);
   const std::vector<float> rots = {0, 0, 0, 1, s, 0, 0, c};  // 0 -> 90 degrees about x
   const int aT = acc(add(times.data(), 8), 5126, 2, "SCALAR", ",\"min\":[0],\"max\":[1]");

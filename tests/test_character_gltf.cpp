@@ -2,6 +2,8 @@
 // real characters in ../shared/data (skipped visibly when absent).
 #include <catch2/catch.hpp>
 
+#include <limits>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -128,6 +130,37 @@ TEST_CASE("glTF import rejects bad files with the file and the problem", "[chara
     const std::string p = charfix::write_temp("split_skin_zero.glb", charfix::skinned_glb(o));
     CHECK_THROWS_WITH(load_gltf(p), Contains("split_skin_zero.glb") && Contains("skin 0 inverse bind matrix 0") &&
                                         Contains("(joint 'bone1') is not invertible"));
+  }
+  SECTION("animation key times out of order, not finite, or years long") {
+    // Found by fuzz_gltf: times of 1e31 s made the importer cast 1e32 frames
+    // to int (undefined) and would have sampled the clip for ever.
+    charfix::GlbOptions o;
+    o.key_times[0] = 1.0f;
+    o.key_times[1] = 0.5f;
+    std::string p = charfix::write_temp("anim_order.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("anim_order.glb") && Contains("animation 'bend' sampler 0 input") &&
+                                        Contains("key time 1 is 0.5 after 1"));
+    o.key_times[0] = -1.0f;
+    p = charfix::write_temp("anim_negative.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("anim_negative.glb") && Contains("key time 0 is -1"));
+    o.key_times[0] = 0.0f;
+    o.key_times[1] = std::numeric_limits<float>::quiet_NaN();
+    p = charfix::write_temp("anim_nan.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("anim_nan.glb") && Contains("input: element 1 is not finite"));
+    o.key_times[1] = 1e9f;  // 32 years at 30 fps
+    p = charfix::write_temp("anim_years.glb", charfix::skinned_glb(o));
+    CHECK_THROWS_WITH(load_gltf(p), Contains("anim_years.glb") && Contains("animation 'bend' lasts 1e+09 s") &&
+                                        Contains("joint samples a clip may hold"));
+    // Without clips the file loads: the mesh and rig are fine.
+    GltfImportOptions no_clips;
+    no_clips.load_clips = false;
+    CHECK(load_gltf(p, no_clips).clips.empty());
+    // A clip of 10 minutes is sampled.
+    o.key_times[1] = 600.0f;
+    p = charfix::write_temp("anim_long.glb", charfix::skinned_glb(o));
+    const Character c = load_gltf(p);
+    REQUIRE(c.clips.size() == 1);
+    CHECK(c.clips[0].frames.size() == 18001);
   }
 }
 

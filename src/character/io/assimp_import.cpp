@@ -291,7 +291,7 @@ Character load_assimp_character(const std::string& path, const ImportOptions& op
       clip.name = a->mName.length ? a->mName.C_Str() : "animation" + std::to_string(ai);
       clip.fps = opt.clip_fps;
       const double duration = a->mDuration / tps;
-      const int frames = static_cast<int>(std::floor(duration * opt.clip_fps + 1e-3)) + 1;
+      const int frames = clip_frame_count(duration, opt.clip_fps, sk.num_joints(), path + ": animation '" + clip.name + "'");
       for (int f = 0; f < frames; ++f) {
         const double t = f / static_cast<double>(opt.clip_fps) * tps;
         Pose p = rest_pose(sk);

@@ -490,6 +490,13 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
         ch_.comps = path_id == 1 ? 4 : 3;
         ch_.interp = s.interpolation == "STEP" ? 1 : s.interpolation == "CUBICSPLINE" ? 2 : 0;
         ch_.times = rd.floats(s.input, 1, what + " input");
+        // glTF: key times start at 0 or later and increase (equal neighbours
+        // are let through: some exporters write them; floats() has refused
+        // what is not finite).
+        for (std::size_t k = 0; k < ch_.times.size(); ++k)
+          if (!(ch_.times[k] >= (k ? ch_.times[k - 1] : 0.0f)))
+            rd.fail(what, " input: key time ", k, " is ", ch_.times[k],
+                    k ? detail::cat(" after ", ch_.times[k - 1]) : std::string(), " (times must be >= 0 and increasing)");
         ch_.values = rd.floats(s.output, ch_.comps, what + " output");
         const std::size_t need = ch_.times.size() * (ch_.interp == 2 ? 3 : 1) * ch_.comps;
         if (ch_.values.size() < need)
@@ -501,7 +508,8 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
       Clip clip;
       clip.name = anim.name.empty() ? "animation" + std::to_string(ai) : anim.name;
       clip.fps = opt.clip_fps;
-      const int frames = static_cast<int>(std::floor(duration * opt.clip_fps + 1e-3f)) + 1;
+      const int frames = clip_frame_count(duration, opt.clip_fps, sk.num_joints(),
+                                          path + ": animation '" + clip.name + "'");
       for (int f = 0; f < frames; ++f) {
         Pose p = rest_pose(sk);
         for (const auto& c : channels) sample(c, static_cast<float>(f) / opt.clip_fps, p.local[c.joint]);

@@ -1,10 +1,23 @@
 #include "gatcore/character/rig/pose.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
 
 Pose rest_pose(const Skeleton& s) { return Pose{s.rest_local}; }
+
+int clip_frame_count(double duration_s, double fps, std::int32_t joints, const std::string& what) {
+  GATCORE_CHECK(std::isfinite(fps) && fps > 0, what, ": sampling rate ", fps, " fps");
+  GATCORE_CHECK(std::isfinite(duration_s) && duration_s >= 0, what, ": duration ", duration_s, " s");
+  const double frames = std::floor(duration_s * fps + 1e-3) + 1;
+  const double limit = double(kMaxClipJointSamples) / double(std::max(1, joints));
+  GATCORE_CHECK(frames <= limit, what, " lasts ", duration_s, " s: ", frames, " frames at ", fps, " fps of ", joints,
+                " joints, more than the ", kMaxClipJointSamples, " joint samples a clip may hold");
+  return static_cast<int>(frames);
+}
 
 Pose bind_pose(const Skeleton& s) {
   const std::int32_t n = s.num_joints();

@@ -29,4 +29,14 @@ struct Clip {
   std::vector<Pose> frames;
 };
 
+// Most joint transforms an imported clip may hold (frames x joints, about
+// 335 MB): an hour at 30 fps of a 77-joint rig. A file's animation ends
+// where its last key time says; a small file claiming years must not make
+// the importer sample it.
+inline constexpr std::int64_t kMaxClipJointSamples = std::int64_t(1) << 23;
+// Frames of a clip `duration_s` long sampled at `fps` (both ends), for a rig
+// of `joints`; throws InvalidArgument naming `what` for a duration that is
+// negative or not finite, or a clip past kMaxClipJointSamples.
+int clip_frame_count(double duration_s, double fps, std::int32_t joints, const std::string& what);
+
 }  // namespace gatcore::character
