@@ -108,7 +108,21 @@ class BlockCache {
         by_age_.pop_front();
       }
     }
+    if (evicted.empty()) return nullptr;
+    // One of the blocks let go of becomes the new one, resized in place of
+    // an unmap and a fresh map: its pages stay (up to the smaller size), so
+    // they are neither faulted in nor cleared again. The one that keeps the
+    // most pages.
+    auto keep = std::max_element(evicted.begin(), evicted.end(), [&](const Block& a, const Block& b) {
+      return std::min(a.bytes, bytes) < std::min(b.bytes, bytes);
+    });
+    const Block k = *keep;
+    evicted.erase(keep);
     for (const Block& b : evicted) unmap_block(b.ptr, b.bytes);
+    if (k.bytes == bytes) return k.ptr;
+    void* p = mremap(k.ptr, k.bytes, bytes, MREMAP_MAYMOVE);
+    if (p != MAP_FAILED) return p;
+    unmap_block(k.ptr, k.bytes);
     return nullptr;
   }
   // Keeps the block (asked for as `bytes`) if there is room, else frees it.
