@@ -69,7 +69,7 @@ TEST_CASE("tensor: the CPU block cache reuses freed blocks and never grows the p
   {
     // Past the high-water mark each new block is an old one resized (its
     // pages kept): 24 of them fault in only their 64 KiB of growth, the
-    // other 4 are fresh (about 29 k faults if all 28 were).
+    // other 4 are fresh (about 29 k faults if all 28 were; 5.6 k measured).
     const auto faults = [] {
       rusage u{};
       getrusage(RUSAGE_SELF, &u);
@@ -80,7 +80,7 @@ TEST_CASE("tensor: the CPU block cache reuses freed blocks and never grows the p
     for (int k = 0; k < 28; ++k) touch(b.emplace_back(Tensor::empty(1024, 1040)));  // 4 MiB + 64 KiB
     const long f = faults() - f0;
     INFO(f << " page faults for 28 blocks of 4 MiB + 64 KiB");
-    CHECK(f < 12000);
+    CHECK(f < 16000);  // sanitizer builds fault their shadow pages in too
     for (std::size_t k = 0; k < b.size(); ++k)  // each block is whole and its own
       CHECK(b[k].data()[1024 * 1040 - 1] == 1.0f);
     b[3].fill_(3.0f);
