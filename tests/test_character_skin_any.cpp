@@ -38,6 +38,16 @@ PreparedCharacter procedural(ProceduralKind kind, std::uint32_t seed) {
   return prepare_character(procedural_character(o), DeltaMushParams{0, 0.5f});
 }
 
+// A skinweights-any small enough for tests to run in milliseconds.
+models::ModelConfig small_any_config(int k) {
+  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+  cfg.stage1 = {16, 8};
+  cfg.gc_dims = {8, 8, 8};
+  cfg.global_mlp = {16};
+  cfg.classifier = {16};
+  return cfg;
+}
+
 // The prior's model starts with a zero last layer (it is bone heat, whatever
 // the rest); tests of what the network does draw that layer at random.
 void randomise_last_layer(models::Model& m, std::uint32_t seed) {
@@ -201,11 +211,7 @@ TEST_CASE("skinweights-any predicts the same weights whatever the joints are cal
   for (std::size_t j = 0; j < renamed.skeleton.names.size(); ++j)
     renamed.skeleton.names[j] = "mixamorig:Bone_" + std::to_string(97 * j % 101);
   const int k = 4;
-  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
-  cfg.stage1 = {16, 8};
-  cfg.gc_dims = {8, 8, 8};
-  cfg.global_mlp = {16};
-  cfg.classifier = {16};
+  models::ModelConfig cfg = small_any_config(k);
   const bool shared = GENERATE(false, true);
   if (shared) {
     cfg.pair_scorer = {8};
@@ -256,15 +262,11 @@ void check_same_weights(const SkinWeights& a, const SkinWeights& b, double tol) 
 }  // namespace
 
 TEST_CASE("skinweights-any and bone heat give the same weights in centimetres and moved", "[skin_any]") {
-  ProceduralOptions o;
-  o.seed = 7;
-  o.ring_segments = 8;
-  o.rings_per_bone = 3;
   // Jittered by up to 2 mm: the procedural rings sit exactly on the joints,
   // where two bones tie for nearest and float noise picks the winner (in
   // any frame, scaled or not); a scanned or sculpted mesh has no such ties.
   // Copies of a point along seams move together (the mesh stays closed).
-  Character metres = procedural_character(o);
+  Character metres = posefix::humanoid(7);
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> J(-2e-3f, 2e-3f);
   std::map<std::array<float, 3>, std::array<float, 3>> moved;
@@ -283,11 +285,7 @@ TEST_CASE("skinweights-any and bone heat give the same weights in centimetres an
   REQUIRE(std::abs(inverse(sk.inverse_bind[0])[13] - (100.f * inverse(metres.skeleton.inverse_bind[0])[13] - 40.f)) <
           1e-2f);
   const int k = 4;
-  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
-  cfg.stage1 = {16, 8};
-  cfg.gc_dims = {8, 8, 8};
-  cfg.global_mlp = {16};
-  cfg.classifier = {16};
+  models::ModelConfig cfg = small_any_config(k);
   auto model = models::make_model(cfg, 5);
   randomise_last_layer(*model, 8);
   const PreparedCharacter pc = prepare_character(metres, DeltaMushParams{0, 0.5f});
@@ -312,11 +310,7 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
     const PreparedCharacter pc = procedural(ProceduralKind::humanoid, 6);
     BoneCandidates c;
     const models::Sample s = bone_candidate_sample(pc, k, &c);
-    models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
-    cfg.stage1 = {16, 8};
-    cfg.gc_dims = {8, 8, 8};
-    cfg.global_mlp = {16};
-    cfg.classifier = {16};
+    models::ModelConfig cfg = small_any_config(k);
     if (shared) {
       cfg.pair_scorer = {8};
       cfg.pair_features = kPairFeatures;
@@ -409,11 +403,7 @@ TEST_CASE("skinweights-any's validation L1 is gat eval's L1 over the character's
   }
   INFO(partial << " vertices with weight outside their candidates, " << none << " with all of it");
   REQUIRE(partial > 0);
-  models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
-  cfg.stage1 = {16, 8};
-  cfg.gc_dims = {8, 8, 8};
-  cfg.global_mlp = {16};
-  cfg.classifier = {16};
+  models::ModelConfig cfg = small_any_config(k);
   auto model = models::make_model(cfg, 2);
   randomise_last_layer(*model, 3);
   const models::Normaliser norm = models::Normaliser::fit({s}, false);
