@@ -256,10 +256,16 @@ inline std::string skinned_glb(const GlbOptions& o = {}) {
   return glb;
 }
 
-inline std::string write_temp(const std::string& name, const std::string& bytes) {
+// The character tests' scratch folder (under the process's own TMPDIR:
+// tests/catch_main.cpp), created if missing.
+inline std::filesystem::path temp_dir() {
   const auto dir = std::filesystem::temp_directory_path() / "gatcore_char_tests";
   std::filesystem::create_directories(dir);
-  const auto p = dir / name;
+  return dir;
+}
+
+inline std::string write_temp(const std::string& name, const std::string& bytes) {
+  const auto p = temp_dir() / name;
   std::ofstream(p, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   return p.string();
 }

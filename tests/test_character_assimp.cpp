@@ -33,7 +33,7 @@ std::string to_fbx(const std::string& src, const std::string& name) {
   Assimp::Importer imp;
   const aiScene* s = imp.ReadFile(src, 0);
   REQUIRE(s != nullptr);
-  const auto out = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / name).string();
+  const auto out = (charfix::temp_dir() / name).string();
   Assimp::Exporter ex;
   REQUIRE(ex.Export(s, "fbxa", out) == AI_SUCCESS);
   return out;

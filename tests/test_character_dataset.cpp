@@ -240,7 +240,7 @@ TEST_CASE("dataset descriptions round-trip and drive deterministic epochs", "[ch
   const DatasetDescription d = describe_dataset(
       {"procedural:humanoid:0", "procedural:humanoid:1", "procedural:creature:2", "procedural:humanoid:3"}, {}, settings);
   CHECK(d.split.train.size() == 2);
-  const auto path = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "dataset.json").string();
+  const auto path = (charfix::temp_dir() / "dataset.json").string();
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
   save_dataset(path, d);
   const DatasetDescription e = load_dataset(path);
@@ -287,7 +287,7 @@ TEST_CASE("dataset files are validated like gat dataset build's options (issue #
   }
   // One field at a time, from a valid description.
   const DatasetDescription d = describe_dataset({"procedural:humanoid:0", "procedural:humanoid:1", "procedural:humanoid:2"}, {});
-  const auto path = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "ranges.json").string();
+  const auto path = (charfix::temp_dir() / "ranges.json").string();
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
   save_dataset(path, d);
   std::ifstream is(path);

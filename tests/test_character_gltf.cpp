@@ -278,7 +278,7 @@ TEST_CASE("glTF export of new weights re-imports with those weights, the rest in
       w.joint[w.ptr[v]] = 2;
     }
   for (const char* name : {"export_out.glb", "export_out.gltf"}) {
-    const auto out = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / name).string();
+    const auto out = (charfix::temp_dir() / name).string();
     save_gltf_with_weights(src, ch, w, out);
     const Character back = load_gltf(out);
     INFO(out);
@@ -333,7 +333,7 @@ TEST_CASE("glTF import of one skin per mesh, each relative to its own mesh, in o
       if (box) w.joint.insert(w.joint.end(), {1, 2}), w.weight.insert(w.weight.end(), {0.5f, 0.5f});  // helper: new to it
       w.ptr.push_back(static_cast<std::int64_t>(w.joint.size()));
     }
-    const auto out = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "split_skin_out.glb").string();
+    const auto out = (charfix::temp_dir() / "split_skin_out.glb").string();
     save_gltf_with_weights(src, ch, w, out);
     const Character back = load_gltf(out);
     REQUIRE(back.mesh.num_vertices() == ch.mesh.num_vertices());
@@ -351,7 +351,7 @@ TEST_CASE("glTF import of one skin per mesh, each relative to its own mesh, in o
       for (std::size_t i = 0; i < p.size(); ++i) p[i] += 0.01f * float(f + 1) * float(1 + i % 3);
       baked.positions.push_back(p);
     }
-    const auto glb = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "split_skin_baked.glb").string();
+    const auto glb = (charfix::temp_dir() / "split_skin_baked.glb").string();
     save_gltf_morph_animation(src, ch, baked, glb);
     for (const Character& c : {ch, load_gltf(glb)}) {
       const TargetFrames t = read_target_frames(c, glb);
@@ -369,7 +369,7 @@ TEST_CASE("glTF export keeps a real character's content", "[character][gltf][exp
     return;
   }
   const Character ch = load_gltf(p.string());
-  const auto out = (std::filesystem::temp_directory_path() / "gatcore_char_tests" / "Farmer_weights.glb").string();
+  const auto out = (charfix::temp_dir() / "Farmer_weights.glb").string();
   save_gltf_with_weights(p.string(), ch, ch.mesh.weights, out);
   const Character back = load_gltf(out);
   CHECK(back.mesh.positions == ch.mesh.positions);

@@ -49,7 +49,7 @@ TEST_CASE("error map: colours follow the error, the nearer surface wins", "[char
 }
 
 TEST_CASE("PNG files round-trip; pictures of a deformed tube and a loss curve", "[character][render]") {
-  const auto dir = std::filesystem::temp_directory_path() / "gatcore_char_tests";
+  const auto dir = charfix::temp_dir();
   std::filesystem::create_directories(dir);
   Image img;
   img.width = 300;
