@@ -8,7 +8,7 @@
 #      left to the Release suite: same code paths, 4x the lavapipe time
 #      under ASan; the benchmarks are not built), and
 #   2. every fuzzer for GATCORE_FUZZ_SECONDS (default 30) each, from the
-#      seed corpus plus the issue #20 reproducers.
+#      seed corpus plus the issue #20 reproducers and tests/fuzz/found.
 # Usage: bash scripts/sanitize.sh [--build-only|--fuzz-only]   (from anywhere)
 set -euo pipefail
 
@@ -56,7 +56,7 @@ for f in checkpoint bvh pc2 gltf dataset; do
   cp "$build/tests/fuzz/corpus/$f"/* "$work/$f/"
   log="$work/$f.log"
   if ! (cd "$work" && "../tests/fuzz/fuzz_$f" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=20 \
-          -print_final_stats=1 "$f" "$root/tests/fuzz/repro" >"$log" 2>&1); then
+          -print_final_stats=1 "$f" "$root/tests/fuzz/repro" "$root/tests/fuzz/found" >"$log" 2>&1); then
     tail -n 60 "$log"
     echo "sanitize: fuzz_$f found a defect (reproducer: $work/crash-* / leak-* / timeout-* / oom-*)" >&2
     exit 1

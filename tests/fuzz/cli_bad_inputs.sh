@@ -2,9 +2,11 @@
 # Every issue #20 reproducer through the gat CLI: a non-zero exit within the
 # time limit and one line naming the file (no crash, hang, or bare
 # standard-library message such as "stof" / "std::bad_alloc").
-# Usage: cli_bad_inputs.sh GAT REPRO_DIR
+# Then the files our own fuzzers found (FOUND_DIR, tests/fuzz/found).
+# Usage: cli_bad_inputs.sh GAT REPRO_DIR FOUND_DIR
 gat="$1"
 repro="$2"
+found="$3"
 fail=0
 # Outputs the refused commands must not write: in a folder of this run's own
 # (a fixed /tmp name kept a file an earlier run or another build wrote).
@@ -27,6 +29,10 @@ check() {  # check NAME_IN_MESSAGE COMMAND...
 }
 for f in "$repro"/*.bvh "$repro"/*.gcm "$repro"/*.pc2 "$repro"/*.json "$repro"/*/dataset.json; do
   check "$(basename "$f")" "$gat" info "$f"
+done
+for f in "$found"/*.glb; do
+  check "$(basename "$f")" "$gat" info "$f"
+  check "$(basename "$f")" "$gat" predict-weights --method bone-heat "$f" -o "$work/weights.glb"
 done
 # Training on datasets gat dataset build would refuse: refused before any work
 # (motion_stride 0 used to loop until the OOM killer).
