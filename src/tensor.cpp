@@ -119,7 +119,7 @@ class BlockCache {
     const Block k = *keep;
     evicted.erase(keep);
     for (const Block& b : evicted) unmap_block(b.ptr, b.bytes);
-    if (k.bytes == bytes) return k.ptr;
+    // (Never the asked-for size: a block of it would have been a hit.)
     void* p = mremap(k.ptr, k.bytes, bytes, MREMAP_MAYMOVE);
     if (p != MAP_FAILED) return p;
     unmap_block(k.ptr, k.bytes);

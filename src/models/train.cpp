@@ -471,16 +471,17 @@ Evaluation Trainer::validate(const std::vector<Sample>& samples) {
     comm_.sum(l1.data(), l1.size());
     comm_.sum(dominant.data(), dominant.size());
   }
+  // Means over the samples, summed in sample order.
+  const auto mean = [&](const std::vector<double>& v) {
+    double sum = 0;
+    for (double x : v) sum += x;
+    return samples.empty() ? 0.0 : sum / double(samples.size());
+  };
   Evaluation e;
-  for (double l : losses) e.loss += l;
-  e.loss = samples.empty() ? 0.0 : e.loss / double(samples.size());
+  e.loss = mean(losses);
   if (weights) {
-    e.weight_l1 = 0;
-    for (double v : l1) e.weight_l1 += v;
-    e.weight_l1 = samples.empty() ? 0.0 : e.weight_l1 / double(samples.size());
-    e.dominant = 0;
-    for (double v : dominant) e.dominant += v;
-    e.dominant = samples.empty() ? 0.0 : e.dominant / double(samples.size());
+    e.weight_l1 = mean(l1);
+    e.dominant = mean(dominant);
   }
   return e;
 }
