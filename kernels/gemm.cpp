@@ -118,6 +118,33 @@ void gemm(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Te
   detail::gemm_tiled(A, trans_a, B, trans_b, C, alpha, beta, fn, kTileM, kTileN);
 }
 
+detail::GemmTilePlan detail::gemm_tile_plan(std::int64_t m, std::int64_t n, std::int64_t k, std::int64_t tile_m,
+                                            std::int64_t tile_n) {
+  // The tiles of a dimension are made equal (a multiple of 16, never larger
+  // than asked): a 1088-row weight gradient in 1024-row tiles was one tile of
+  // 1024 rows and one of 64, so one of 2 threads did 94 % of the NeuroSkinning
+  // classifier's largest product (bench/RESULTS.md item 12).
+  const auto even_tile = [](std::int64_t len, std::int64_t tile) {
+    const std::int64_t count = (len + tile - 1) / tile;
+    return std::max<std::int64_t>(1, std::min(tile, ((len + count - 1) / count + 15) / 16 * 16));
+  };
+  GemmTilePlan p{};
+  p.tile_m = even_tile(m, tile_m);
+  p.tile_n = even_tile(n, tile_n);
+  p.tiles_m = (m + p.tile_m - 1) / p.tile_m;
+  p.tiles_n = (n + p.tile_n - 1) / p.tile_n;
+  std::int64_t splits = 1;
+  if (p.tiles_m * p.tiles_n < kSplitKBelowTiles && k >= 2 * kSplitKMinChunk)
+    splits = std::max<std::int64_t>(
+        1, std::min({kSplitKMax, k / kSplitKMinChunk, kSplitKMaxPartialFloats / std::max<std::int64_t>(1, m * n)}));
+  // An even number of chunks where there are several: 7 chunks on 2 threads
+  // left one idle for a seventh of the product.
+  if (splits > 2 && splits % 2 == 1) --splits;
+  p.kc = std::max<std::int64_t>(1, (k + splits - 1) / splits);
+  p.splits = std::max<std::int64_t>(1, (k + p.kc - 1) / p.kc);
+  return p;
+}
+
 void detail::gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
                         float beta, GemmTileFn fn, std::int64_t tile_m, std::int64_t tile_n) {
   check_cpu_f32(A, "gemm: A");
@@ -155,15 +182,12 @@ void detail::gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool tra
   // Fixed tiling of C, and a fixed split of k when C has too few tiles to
   // keep the threads busy (weight gradients X^T dY: small C, long k). Both
   // are functions of the shape only.
-  const std::int64_t tiles_m = (m + tile_m - 1) / tile_m, tiles_n = (n + tile_n - 1) / tile_n;
-  const std::int64_t tiles = tiles_m * tiles_n;
+  const GemmTilePlan plan = gemm_tile_plan(m, n, k, tile_m, tile_n);
+  tile_m = plan.tile_m;
+  tile_n = plan.tile_n;
+  const std::int64_t tiles_n = plan.tiles_n, tiles = plan.tiles_m * plan.tiles_n;
+  const std::int64_t splits = plan.splits, kc = plan.kc;
   const double flops = 2.0 * double(m) * double(n) * double(k);
-  std::int64_t splits = 1;
-  if (tiles < kSplitKBelowTiles && k >= 2 * kSplitKMinChunk)
-    splits = std::max<std::int64_t>(
-        1, std::min({kSplitKMax, k / kSplitKMinChunk, kSplitKMaxPartialFloats / std::max<std::int64_t>(1, m * n)}));
-  const std::int64_t kc = (k + splits - 1) / splits;
-  splits = (k + kc - 1) / kc;
 
   // Split-k partials: P_s = alpha op(A)[:, ks] op(B)[ks, :], summed in order s = 0, 1, ...
   // (uninitialised: every element is written with beta = 0)

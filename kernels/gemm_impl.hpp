@@ -40,6 +40,14 @@ void gemm_bf16_tile(const GemmArgs& g, bool hardware);
 // gemm()'s checks, fixed tiling and threading around a serial tile product
 // (gemm() picks `tile` and the tile size from the precision and the CPU).
 using GemmTileFn = void (*)(const GemmArgs&);
+// How gemm_tiled cuts C [m, n] (k deep) for at most `tile_m` x `tile_n`
+// tiles: equal tiles per dimension (a multiple of 16), and a split of k into
+// an even number of chunks where C has a single tile. A function of the shape
+// only, so the result does not depend on the thread count.
+struct GemmTilePlan {
+  std::int64_t tile_m, tile_n, tiles_m, tiles_n, splits, kc;
+};
+GemmTilePlan gemm_tile_plan(std::int64_t m, std::int64_t n, std::int64_t k, std::int64_t tile_m, std::int64_t tile_n);
 void gemm_tiled(const Tensor& A, bool trans_a, const Tensor& B, bool trans_b, const Tensor& C, float alpha,
                 float beta, GemmTileFn tile, std::int64_t tile_m, std::int64_t tile_n);
 // Defined only on x86-64 builds (gemm_avx2.cpp / gemm_avx512.cpp).

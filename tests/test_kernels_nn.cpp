@@ -161,6 +161,48 @@ TEST_CASE("gemm: 1 vs 2 threads give bitwise identical results", "[gemm][determi
   }
 }
 
+TEST_CASE("gemm: the tile plan gives 2 threads equal work on the models' shapes", "[gemm][determinism]") {
+  // What a thread gets under the static schedule gemm_tiled uses (tasks in
+  // order, split evenly): the larger share of the multiply-adds, in [0.5, 1].
+  const auto larger_share = [](const cpu::detail::GemmTilePlan& p, std::int64_t m, std::int64_t n, std::int64_t k) {
+    const std::int64_t tasks = p.tiles_m * p.tiles_n * p.splits;
+    double work[2] = {0.0, 0.0};
+    for (std::int64_t task = 0; task < tasks; ++task) {
+      const std::int64_t t = task / p.splits, sp = task % p.splits;
+      const std::int64_t i0 = (t / p.tiles_n) * p.tile_m, j0 = (t % p.tiles_n) * p.tile_n;
+      const double mi = double(std::min(p.tile_m, m - i0)), nj = double(std::min(p.tile_n, n - j0));
+      const double kk = double(std::min(p.kc, k - sp * p.kc));
+      work[task < (tasks + 1) / 2 ? 0 : 1] += mi * nj * kk;
+    }
+    return std::max(work[0], work[1]) / (work[0] + work[1]);
+  };
+  struct Case {
+    std::int64_t m, n, k, tile;
+  };
+  // NeuroSkinning's classifier weight gradient (1088 x 1024, k = 12 x 2048)
+  // in bf16 (1024) and fp32 (512) tiles; a weight gradient that took 7 k
+  // chunks; DenseGATs' shapes (8000 rows).
+  const Case cases[] = {{1088, 1024, 24576, 1024}, {1088, 1024, 24576, 512}, {576, 512, 24576, 1024},
+                        {8000, 504, 512, 512},     {504, 512, 8000, 512},     {24576, 1088, 1024, 1024}};
+  for (const Case& c : cases) {
+    const cpu::detail::GemmTilePlan p = cpu::detail::gemm_tile_plan(c.m, c.n, c.k, c.tile, c.tile);
+    INFO("m " << c.m << " n " << c.n << " k " << c.k << " tile " << c.tile << ": tiles " << p.tiles_m << " x "
+              << p.tiles_n << " of " << p.tile_m << " x " << p.tile_n << ", " << p.splits << " k chunks of "
+              << p.kc);
+    REQUIRE(p.tile_m <= c.tile);
+    REQUIRE(p.tile_n <= c.tile);
+    REQUIRE(p.tile_m % 16 == 0);
+    REQUIRE(p.tiles_m * p.tile_m >= c.m);
+    REQUIRE(p.tiles_n * p.tile_n >= c.n);
+    REQUIRE(p.splits * p.kc >= c.k);
+    REQUIRE(larger_share(p, c.m, c.n, c.k) < 0.53);
+  }
+  // The 1088-row case is two tiles of 544 rows (it was 1024 and 64).
+  const cpu::detail::GemmTilePlan p = cpu::detail::gemm_tile_plan(1088, 1024, 24576, 1024, 1024);
+  CHECK(p.tile_m == 544);
+  CHECK(p.tiles_m == 2);
+}
+
 TEST_CASE("gemm: bad arguments throw naming the argument", "[gemm][errors]") {
   Tensor A = Tensor::zeros(3, 4), B = Tensor::zeros(5, 2), C = Tensor::zeros(3, 2);
   REQUIRE_THROWS_AS(cpu::gemm(A, false, B, false, C), InvalidArgument);
