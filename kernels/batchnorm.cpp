@@ -77,9 +77,10 @@ void batchnorm_eval_scale(const Tensor& gamma, const Tensor& running_var, float 
 
 void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
                               const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
-                              const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across) {
+                              const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across,
+                              bool accumulate_dx) {
   (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_train_backward : isa_baseline::batchnorm_train_backward)(
-      x, gamma, save_mean, save_invstd, d_y, d_x, d_gamma, d_beta, across);
+      x, gamma, save_mean, save_invstd, d_y, d_x, d_gamma, d_beta, across, accumulate_dx);
 }
 
 void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& running_mean,
@@ -107,9 +108,10 @@ void batchnorm_act_apply(const Tensor& x, const Tensor& beta, Activation f, floa
 void batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& beta, Activation f, float slope,
                                   const Tensor& save_mean, const Tensor& save_invstd, const Tensor& save_affine,
                                   const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta,
-                                  const SumAcross& across) {
+                                  const SumAcross& across, bool accumulate_dx) {
   (GATCORE_BN_AVX512 ? isa_avx512::batchnorm_act_train_backward : isa_baseline::batchnorm_act_train_backward)(
-      x, gamma, beta, f, slope, save_mean, save_invstd, save_affine, d_y, d_x, d_gamma, d_beta, across);
+      x, gamma, beta, f, slope, save_mean, save_invstd, save_affine, d_y, d_x, d_gamma, d_beta, across,
+      accumulate_dx);
 }
 
 }  // namespace gatcore::cpu

@@ -33,9 +33,12 @@ void batchnorm_eval_scale(const Tensor& gamma, const Tensor& running_var, float 
 // With `across`, Σdy and Σdy·x̂ (and the row count) are summed over the
 // processes for d_x; d_gamma / d_beta stay this process's share (they are
 // parameter gradients, summed with all the others after backward).
+// accumulate_dx = false writes d_x instead (its contents ignored, NaN
+// included): the bits of accumulating onto zeros, without the zero fill.
 void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
                               const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
-                              const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across = {});
+                              const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across = {},
+                              bool accumulate_dx = true);
 // Backward of the eval forward (an affine map per column).
 void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& running_mean,
                              const Tensor& running_var, float eps, const Tensor& d_y, const Tensor& d_x,
@@ -60,10 +63,10 @@ void batchnorm_act_apply(const Tensor& x, const Tensor& beta, Activation f, floa
 // Backward of the fused forward from x, the saved statistics and d_y (the
 // gradient of f's output); accumulates d_x, d_gamma, d_beta (each may be
 // undefined). The same values as activation_backward then
-// batchnorm_train_backward; `across` as there.
+// batchnorm_train_backward; `across` and accumulate_dx as there.
 void batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& beta, Activation f, float slope,
                                   const Tensor& save_mean, const Tensor& save_invstd, const Tensor& save_affine,
                                   const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta,
-                                  const SumAcross& across = {});
+                                  const SumAcross& across = {}, bool accumulate_dx = true);
 
 }  // namespace gatcore::cpu

@@ -26,7 +26,17 @@ enum TanhMode : int {
   kShrinkFwd = 1,     // out = x - t
   kShrinkBwd = 2,     // out += t^2 * dy
   kTanhBwdFromX = 3,  // out += (1 - t)(1 + t) * dy
+  // The backward modes writing out (its old contents ignored) instead of
+  // adding to it: the sum onto a zero vector, so the bits of accumulating
+  // onto a zero-filled out (activation_backward's accumulate = false).
+  kShrinkBwdSet = 4,
+  kTanhBwdFromXSet = 5,
 };
+// The arithmetic of a mode (a write mode computes as its accumulating one).
+constexpr int math_mode(int mode) { return mode >= kShrinkBwdSet ? mode - 2 : mode; }
+// Whether a mode reads dy / adds onto out.
+constexpr bool is_bwd(int mode) { return mode != kTanhFwd && mode != kShrinkFwd; }
+constexpr bool adds_to_out(int mode) { return mode == kShrinkBwd || mode == kTanhBwdFromX; }
 
 using TanhRowFn = void (*)(const float* x, const float* dy, float* out, std::int64_t n);
 
@@ -35,10 +45,11 @@ void tanh_row_scalar(const float* x, const float* dy, float* out, std::int64_t n
 #pragma omp simd
   for (std::int64_t i = 0; i < n; ++i) {
     const float t = fastmath::tanh_nofma(x[i]);
+    const float o = adds_to_out(Mode) ? out[i] : 0.0f;
     if constexpr (Mode == kTanhFwd) out[i] = t;
     else if constexpr (Mode == kShrinkFwd) out[i] = x[i] - t;
-    else if constexpr (Mode == kShrinkBwd) out[i] += t * t * dy[i];
-    else out[i] += (1.0f - t) * (1.0f + t) * dy[i];
+    else if constexpr (math_mode(Mode) == kShrinkBwd) out[i] = o + t * t * dy[i];
+    else out[i] = o + (1.0f - t) * (1.0f + t) * dy[i];
   }
 }
 
@@ -48,7 +59,7 @@ inline __m128 tanh_mode_sse2(__m128 xv, __m128 dyv, __m128 ov) {
   const __m128 t = fastmath::tanh_sse2(xv);
   if constexpr (Mode == kTanhFwd) return t;
   else if constexpr (Mode == kShrinkFwd) return _mm_sub_ps(xv, t);
-  else if constexpr (Mode == kShrinkBwd) return _mm_add_ps(_mm_mul_ps(_mm_mul_ps(t, t), dyv), ov);
+  else if constexpr (math_mode(Mode) == kShrinkBwd) return _mm_add_ps(_mm_mul_ps(_mm_mul_ps(t, t), dyv), ov);
   else {
     const __m128 one = _mm_set1_ps(1.0f);
     const __m128 d = _mm_mul_ps(_mm_sub_ps(one, t), _mm_add_ps(one, t));
@@ -58,19 +69,20 @@ inline __m128 tanh_mode_sse2(__m128 xv, __m128 dyv, __m128 ov) {
 
 template <int Mode>
 void tanh_row_sse2(const float* x, const float* dy, float* out, std::int64_t n) {
-  constexpr bool kBwd = Mode == kShrinkBwd || Mode == kTanhBwdFromX;
+  constexpr bool kBwd = is_bwd(Mode), kAdd = adds_to_out(Mode);
   std::int64_t i = 0;
   for (; i + 4 <= n; i += 4) {
     const __m128 xv = _mm_loadu_ps(x + i);
     const __m128 dyv = kBwd ? _mm_loadu_ps(dy + i) : _mm_setzero_ps();
-    const __m128 ov = kBwd ? _mm_loadu_ps(out + i) : _mm_setzero_ps();
+    const __m128 ov = kAdd ? _mm_loadu_ps(out + i) : _mm_setzero_ps();
     _mm_storeu_ps(out + i, tanh_mode_sse2<Mode>(xv, dyv, ov));
   }
   if (i < n) {  // tail through a padded copy
     alignas(16) float xt[4] = {0, 0, 0, 0}, dt[4] = {0, 0, 0, 0}, ot[4] = {0, 0, 0, 0};
     for (std::int64_t k = 0; k < n - i; ++k) {
       xt[k] = x[i + k];
-      if (kBwd) dt[k] = dy[i + k], ot[k] = out[i + k];
+      if (kBwd) dt[k] = dy[i + k];
+      if (kAdd) ot[k] = out[i + k];
     }
     _mm_store_ps(ot, tanh_mode_sse2<Mode>(_mm_load_ps(xt), _mm_load_ps(dt), _mm_load_ps(ot)));
     for (std::int64_t k = 0; k < n - i; ++k) out[i + k] = ot[k];
@@ -82,7 +94,7 @@ GATCORE_TARGET_AVX2 inline __m256 tanh_mode_avx2(__m256 xv, __m256 dyv, __m256 o
   const __m256 t = fastmath::tanh_avx2(xv);
   if constexpr (Mode == kTanhFwd) return t;
   else if constexpr (Mode == kShrinkFwd) return _mm256_sub_ps(xv, t);
-  else if constexpr (Mode == kShrinkBwd) return _mm256_fmadd_ps(_mm256_mul_ps(t, t), dyv, ov);
+  else if constexpr (math_mode(Mode) == kShrinkBwd) return _mm256_fmadd_ps(_mm256_mul_ps(t, t), dyv, ov);
   else {
     const __m256 one = _mm256_set1_ps(1.0f);
     const __m256 d = _mm256_mul_ps(_mm256_sub_ps(one, t), _mm256_add_ps(one, t));
@@ -92,19 +104,19 @@ GATCORE_TARGET_AVX2 inline __m256 tanh_mode_avx2(__m256 xv, __m256 dyv, __m256 o
 
 template <int Mode>
 GATCORE_TARGET_AVX2 void tanh_row_avx2(const float* x, const float* dy, float* out, std::int64_t n) {
-  constexpr bool kBwd = Mode == kShrinkBwd || Mode == kTanhBwdFromX;
+  constexpr bool kBwd = is_bwd(Mode), kAdd = adds_to_out(Mode);
   std::int64_t i = 0;
   for (; i + 8 <= n; i += 8) {
     const __m256 xv = _mm256_loadu_ps(x + i);
     const __m256 dyv = kBwd ? _mm256_loadu_ps(dy + i) : _mm256_setzero_ps();
-    const __m256 ov = kBwd ? _mm256_loadu_ps(out + i) : _mm256_setzero_ps();
+    const __m256 ov = kAdd ? _mm256_loadu_ps(out + i) : _mm256_setzero_ps();
     _mm256_storeu_ps(out + i, tanh_mode_avx2<Mode>(xv, dyv, ov));
   }
   if (i < n) {
     const __m256i m = fastmath::tail_mask_avx2(n - i);
     const __m256 xv = _mm256_maskload_ps(x + i, m);
     const __m256 dyv = kBwd ? _mm256_maskload_ps(dy + i, m) : _mm256_setzero_ps();
-    const __m256 ov = kBwd ? _mm256_maskload_ps(out + i, m) : _mm256_setzero_ps();
+    const __m256 ov = kAdd ? _mm256_maskload_ps(out + i, m) : _mm256_setzero_ps();
     _mm256_maskstore_ps(out + i, m, tanh_mode_avx2<Mode>(xv, dyv, ov));
   }
 }
@@ -114,7 +126,7 @@ GATCORE_TARGET_AVX512 inline __m512 tanh_mode_avx512(__m512 xv, __m512 dyv, __m5
   const __m512 t = fastmath::tanh_avx512(xv);
   if constexpr (Mode == kTanhFwd) return t;
   else if constexpr (Mode == kShrinkFwd) return _mm512_sub_ps(xv, t);
-  else if constexpr (Mode == kShrinkBwd) return _mm512_fmadd_ps(_mm512_mul_ps(t, t), dyv, ov);
+  else if constexpr (math_mode(Mode) == kShrinkBwd) return _mm512_fmadd_ps(_mm512_mul_ps(t, t), dyv, ov);
   else {
     const __m512 one = _mm512_set1_ps(1.0f);
     const __m512 d = _mm512_mul_ps(_mm512_sub_ps(one, t), _mm512_add_ps(one, t));
@@ -124,19 +136,19 @@ GATCORE_TARGET_AVX512 inline __m512 tanh_mode_avx512(__m512 xv, __m512 dyv, __m5
 
 template <int Mode>
 GATCORE_TARGET_AVX512 void tanh_row_avx512(const float* x, const float* dy, float* out, std::int64_t n) {
-  constexpr bool kBwd = Mode == kShrinkBwd || Mode == kTanhBwdFromX;
+  constexpr bool kBwd = is_bwd(Mode), kAdd = adds_to_out(Mode);
   std::int64_t i = 0;
   for (; i + 16 <= n; i += 16) {
     const __m512 xv = _mm512_loadu_ps(x + i);
     const __m512 dyv = kBwd ? _mm512_loadu_ps(dy + i) : _mm512_setzero_ps();
-    const __m512 ov = kBwd ? _mm512_loadu_ps(out + i) : _mm512_setzero_ps();
+    const __m512 ov = kAdd ? _mm512_loadu_ps(out + i) : _mm512_setzero_ps();
     _mm512_storeu_ps(out + i, tanh_mode_avx512<Mode>(xv, dyv, ov));
   }
   if (i < n) {
     const __mmask16 m = fastmath::tail_mask_avx512(n - i);
     const __m512 xv = _mm512_maskz_loadu_ps(m, x + i);
     const __m512 dyv = kBwd ? _mm512_maskz_loadu_ps(m, dy + i) : _mm512_setzero_ps();
-    const __m512 ov = kBwd ? _mm512_maskz_loadu_ps(m, out + i) : _mm512_setzero_ps();
+    const __m512 ov = kAdd ? _mm512_maskz_loadu_ps(m, out + i) : _mm512_setzero_ps();
     _mm512_mask_storeu_ps(out + i, m, tanh_mode_avx512<Mode>(xv, dyv, ov));
   }
 }
@@ -208,7 +220,7 @@ void activation_forward(Activation f, const Tensor& x, const Tensor& y, float sl
 }
 
 void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x,
-                         float slope) {
+                         float slope, bool accumulate) {
   check_cpu_f32(d_y, "activation_backward: d_y");
   const std::int64_t rows = d_y.rows(), n = d_y.cols();
   if (x.defined()) check_arg(x, rows, n, "activation_backward: x");
@@ -220,29 +232,49 @@ void activation_backward(Activation f, const Tensor& x, const Tensor& y, const T
                 f == Activation::tanhshrink ? " (tanhshrink needs x)" : " (and y is undefined too)");
   if (!d_x.defined()) return;
   check_arg(d_x, rows, n, "activation_backward: d_x");
+  // o = base + term, base = d_x (accumulate) or 0: writing adds the term to
+  // a zero, so a fresh gradient gets the bits of accumulating onto a
+  // zero-filled one without the fill (a pass over d_x, serial in memset).
+  const auto rows_loop = [&](auto term) {
+    if (accumulate)
+      for_each_row(rows, n, [&](std::int64_t r) {
+        float* o = d_x.row(r);
+        term(r, o, [](float* p) { return *p; });
+      });
+    else
+      for_each_row(rows, n, [&](std::int64_t r) {
+        float* o = d_x.row(r);
+        term(r, o, [](float*) { return 0.0f; });
+      });
+  };
   switch (f) {
     case Activation::identity:
-      for_each_row(rows, n, [&](std::int64_t r) {
+      rows_loop([&](std::int64_t r, float* o, auto base) {
         const float* g = d_y.row(r);
-        float* o = d_x.row(r);
 #pragma omp simd
-        for (std::int64_t c = 0; c < n; ++c) o[c] += g[c];
+        for (std::int64_t c = 0; c < n; ++c) o[c] = base(o + c) + g[c];
       });
       return;
     case Activation::tanh:
       if (y.defined()) {
-        for_each_row(rows, n, [&](std::int64_t r) {
+        rows_loop([&](std::int64_t r, float* o, auto base) {
           const float* yp = y.row(r);
           const float* g = d_y.row(r);
-          float* o = d_x.row(r);
 #pragma omp simd
-          for (std::int64_t c = 0; c < n; ++c) o[c] += (1.0f - yp[c]) * (1.0f + yp[c]) * g[c];
+          for (std::int64_t c = 0; c < n; ++c) o[c] = base(o + c) + (1.0f - yp[c]) * (1.0f + yp[c]) * g[c];
         });
-      } else {
+      } else if (accumulate) {
         run_tanh_rows<kTanhBwdFromX>(x, d_y, d_x);
+      } else {
+        run_tanh_rows<kTanhBwdFromXSet>(x, d_y, d_x);
       }
       return;
-    case Activation::tanhshrink: run_tanh_rows<kShrinkBwd>(x, d_y, d_x); return;
+    case Activation::tanhshrink:
+      if (accumulate)
+        run_tanh_rows<kShrinkBwd>(x, d_y, d_x);
+      else
+        run_tanh_rows<kShrinkBwdSet>(x, d_y, d_x);
+      return;
     case Activation::leaky_relu:
     case Activation::relu: {
       // Sign of the input; for both, y > 0 iff x > 0 (slope >= 0 for leaky
@@ -250,13 +282,12 @@ void activation_backward(Activation f, const Tensor& x, const Tensor& y, const T
       const Tensor& s = x.defined() ? x : y;
       const float neg = f == Activation::relu ? 0.0f : slope;
       // dy times a selected constant, as in activation_forward (vectorises; same values).
-      for_each_row(rows, n, [&](std::int64_t r) {
+      rows_loop([&](std::int64_t r, float* o, auto base) {
         const float* sp = s.row(r);
         const float* g = d_y.row(r);
-        float* o = d_x.row(r);
         const float k = neg;
 #pragma omp simd
-        for (std::int64_t c = 0; c < n; ++c) o[c] += g[c] * (sp[c] > 0.0f ? 1.0f : k);
+        for (std::int64_t c = 0; c < n; ++c) o[c] = base(o + c) + g[c] * (sp[c] > 0.0f ? 1.0f : k);
       });
       return;
     }

@@ -11,8 +11,11 @@ using gatcore::Activation;  // include/gatcore/activation.hpp
 void activation_forward(Activation f, const Tensor& x, const Tensor& y, float slope = 0.01f);
 // d_x += f'(x) ⊙ d_y. tanh uses y; tanhshrink needs x; the ReLU family uses
 // x. tanh is a vectorised approximation (max error ~3e-7).
+// accumulate = false writes d_x = f'(x) ⊙ d_y instead, ignoring its old
+// contents (NaN included): the bits of accumulating onto zeros, without the
+// zero fill (a fresh gradient buffer).
 void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x,
-                         float slope = 0.01f);
+                         float slope = 0.01f, bool accumulate = true);
 
 // y = alpha*a + beta*b      (y may alias a or b)
 void axpby(float alpha, const Tensor& a, float beta, const Tensor& b, const Tensor& y);

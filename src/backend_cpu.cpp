@@ -56,8 +56,8 @@ class CpuBackend final : public Backend {
     cpu::activation_forward(f, x, y, slope);
   }
   void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x,
-                           float slope) override {
-    cpu::activation_backward(f, x, y, d_y, d_x, slope);
+                           float slope, bool accumulate) override {
+    cpu::activation_backward(f, x, y, d_y, d_x, slope, accumulate);
   }
   void row_softmax_forward(const Tensor& x, const Tensor& mask, const Tensor& y) override {
     cpu::row_softmax_forward(x, mask, y);
@@ -77,8 +77,8 @@ class CpuBackend final : public Backend {
   }
   void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
                                 const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
-                                const Tensor& d_gamma, const Tensor& d_beta) override {
-    cpu::batchnorm_train_backward(x, gamma, save_mean, save_invstd, d_y, d_x, d_gamma, d_beta);
+                                const Tensor& d_gamma, const Tensor& d_beta, bool accumulate_dx) override {
+    cpu::batchnorm_train_backward(x, gamma, save_mean, save_invstd, d_y, d_x, d_gamma, d_beta, {}, accumulate_dx);
   }
   void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& rm, const Tensor& rv, float eps,
                                const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma,
@@ -113,9 +113,10 @@ class CpuBackend final : public Backend {
   void batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float, Activation f,
                                     float slope, const Tensor& save_mean, const Tensor& save_invstd,
                                     const Tensor& save_affine, const Tensor& d_y, const Tensor& d_x,
-                                    const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across) override {
+                                    const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across,
+                                    bool accumulate_dx) override {
     cpu::batchnorm_act_train_backward(x, gamma, beta, f, slope, save_mean, save_invstd, save_affine, d_y, d_x,
-                                      d_gamma, d_beta, across);
+                                      d_gamma, d_beta, across, accumulate_dx);
   }
 
   void sum_all(const Tensor& x, const Tensor& out) override {
@@ -265,17 +266,20 @@ void Backend::batchnorm_act_train_backward(const Tensor& x, const Tensor& gamma,
                                            Activation f, float slope, const Tensor& save_mean,
                                            const Tensor& save_invstd, const Tensor&, const Tensor& d_y,
                                            const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta,
-                                           const SumAcross& across) {
-  Tensor u = empty(x.rows(), x.cols()), d_u = zeros(x.rows(), x.cols());
+                                           const SumAcross& across, bool accumulate_dx) {
+  Tensor u = empty(x.rows(), x.cols()), d_u = empty(x.rows(), x.cols());
   if (across)
     batchnorm_train_forward_across(x, gamma, beta, eps, 0.0f, u, Tensor{}, Tensor{}, Tensor{}, Tensor{}, across);
   else
     batchnorm_train_forward(x, gamma, beta, eps, 0.0f, u, Tensor{}, Tensor{}, Tensor{}, Tensor{});
-  activation_backward(f, u, Tensor{}, d_y, d_u, slope);
-  if (across)
+  activation_backward(f, u, Tensor{}, d_y, d_u, slope, false);
+  if (across) {
+    // (the across backward has no write mode: a fresh d_x is cleared first)
+    if (!accumulate_dx && d_x.defined()) fill(d_x, 0.0f);
     batchnorm_train_backward_across(x, gamma, save_mean, save_invstd, d_u, d_x, d_gamma, d_beta, across);
-  else
-    batchnorm_train_backward(x, gamma, save_mean, save_invstd, d_u, d_x, d_gamma, d_beta);
+  } else {
+    batchnorm_train_backward(x, gamma, save_mean, save_invstd, d_u, d_x, d_gamma, d_beta, accumulate_dx);
+  }
 }
 
 Backend& backend(Device d) {

@@ -76,9 +76,9 @@ class FakeDeviceBackend final : public Backend {
     ++calls;
     cpu().activation_forward(f, host_alias(x), host_alias(y), slope);
   }
-  void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x, float slope) override {
+  void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x, float slope, bool accumulate) override {
     ++calls;
-    cpu().activation_backward(f, host_alias(x), host_alias(y), host_alias(d_y), host_alias(d_x), slope);
+    cpu().activation_backward(f, host_alias(x), host_alias(y), host_alias(d_y), host_alias(d_x), slope, accumulate);
   }
   void row_softmax_forward(const Tensor& x, const Tensor& mask, const Tensor& y) override {
     ++calls;
@@ -96,9 +96,9 @@ class FakeDeviceBackend final : public Backend {
     ++calls;
     cpu().batchnorm_eval_forward(host_alias(x), host_alias(gamma), host_alias(beta), host_alias(running_mean), host_alias(running_var), eps, host_alias(y));
   }
-  void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean, const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta) override {
+  void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean, const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta, bool accumulate_dx) override {
     ++calls;
-    cpu().batchnorm_train_backward(host_alias(x), host_alias(gamma), host_alias(save_mean), host_alias(save_invstd), host_alias(d_y), host_alias(d_x), host_alias(d_gamma), host_alias(d_beta));
+    cpu().batchnorm_train_backward(host_alias(x), host_alias(gamma), host_alias(save_mean), host_alias(save_invstd), host_alias(d_y), host_alias(d_x), host_alias(d_gamma), host_alias(d_beta), accumulate_dx);
   }
   void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& running_mean, const Tensor& running_var, float eps, const Tensor& d_y, const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta) override {
     ++calls;

@@ -265,6 +265,21 @@ TEST_CASE("activations: forward and backward vs reference, every SIMD level", "[
             cpu::activation_backward(f, x, Tensor(), dy, dx3, slope);
             require_close(dx3, gwant, gtol, gtol, "backward (x only)");
           }
+          // Written instead of accumulated (a fresh gradient buffer): the bits
+          // of accumulating onto zeros, whatever d_x held (NaN here), from x
+          // and y, x alone (tanh's other path) and y alone.
+          for (int from = 0; from < 3; ++from) {
+            if (from == 2 && f == Activation::tanhshrink) continue;
+            const Tensor xa = from == 2 ? Tensor() : x, ya = from == 1 ? Tensor() : y;
+            Tensor dz = make(s.r, s.c, strided), dw = make(s.r, s.c, strided);
+            cpu::fill(dz, 0.0f);
+            cpu::activation_backward(f, xa, ya, dy, dz, slope);
+            cpu::fill(dw, std::numeric_limits<float>::quiet_NaN());
+            cpu::activation_backward(f, xa, ya, dy, dw, slope, false);
+            INFO("write mode, from " << (from == 0 ? "x and y" : from == 1 ? "x" : "y"));
+            REQUIRE(bitwise_equal(dw, dz));
+            REQUIRE(pad_intact(dw));
+          }
           // d_x undefined: nothing to do, no error.
           cpu::activation_backward(f, x, y, dy, Tensor(), slope);
         }
@@ -530,6 +545,15 @@ TEST_CASE("batchnorm: train forward, running stats, train backward", "[batchnorm
         Tensor db2 = Tensor::zeros(1, s.c);
         cpu::batchnorm_train_backward(x, gamma, sm, si, dy, Tensor(), Tensor(), db2);
         require_close(db2, row_mat(dbw), 1e-5, 1e-5, "d_beta alone");
+        // d_x written instead of accumulated: the bits of accumulating onto
+        // zeros, whatever it held (NaN here).
+        Tensor dz = make(s.r, s.c, strided), dw = make(s.r, s.c, strided);
+        cpu::fill(dz, 0.0f);
+        cpu::batchnorm_train_backward(x, gamma, sm, si, dy, dz, Tensor(), Tensor());
+        cpu::fill(dw, std::numeric_limits<float>::quiet_NaN());
+        cpu::batchnorm_train_backward(x, gamma, sm, si, dy, dw, Tensor(), Tensor(), {}, false);
+        REQUIRE(bitwise_equal(dw, dz));
+        REQUIRE(pad_intact(dw));
       }
 }
 
@@ -706,6 +730,15 @@ TEST_CASE("batchnorm_act: the fused kernels give batchnorm then the activation's
           cpu::batchnorm_train_backward(x, gamma, sm0, si0, du, Tensor(), Tensor(), db2_want);
           cpu::batchnorm_act_train_backward(x, gamma, beta, f, slope, sm, si, aff, dy, Tensor(), Tensor(), db2);
           require_close(db2, ref::to_mat(db2_want), 1e-6, 1e-6, "d_beta alone");
+          // d_x written instead of accumulated: the bits of accumulating onto zeros.
+          Tensor dz = make(s.r, s.c, strided), dw = make(s.r, s.c, strided);
+          cpu::fill(dz, 0.0f);
+          cpu::batchnorm_act_train_backward(x, gamma, beta, f, slope, sm, si, aff, dy, dz, Tensor(), Tensor());
+          cpu::fill(dw, std::numeric_limits<float>::quiet_NaN());
+          cpu::batchnorm_act_train_backward(x, gamma, beta, f, slope, sm, si, aff, dy, dw, Tensor(), Tensor(), {},
+                                            false);
+          REQUIRE(bitwise_equal(dw, dz));
+          REQUIRE(pad_intact(dw));
         }
 }
 

@@ -4,6 +4,7 @@
 // ctest runs it again with GATCORE_VK_MAX_BINDING_BYTES=256 at every
 // LP_NATIVE_VECTOR_WIDTH (*_smallbind): then the same comparisons cover the
 // large-operand paths (row-chunked elementwise ops, device-address shaders).
+#include <limits>
 #include <random>
 
 #include "gatcore/graph.hpp"
@@ -89,14 +90,20 @@ TEST_CASE("vulkan: elementwise, activations, bias, column sums, scalars", "[vulk
       gpu().activation_forward(f, V(x), yg, 0.1f);
       require_close(yc, yg, 1e-5f, 1e-6f, "forward");
       Tensor dc = y0.clone(), dg = V(y0);
-      cpu().activation_backward(f, x, yc, b, dc, 0.1f);
-      gpu().activation_backward(f, V(x), yg, V(b), dg, 0.1f);
+      cpu().activation_backward(f, x, yc, b, dc, 0.1f, true);
+      gpu().activation_backward(f, V(x), yg, V(b), dg, 0.1f, true);
       require_close(dc, dg, 1e-5f, 1e-5f, "backward from x and y");
       if (f != Activation::tanhshrink) {
-        cpu().activation_backward(f, Tensor(), yc, b, dc, 0.1f);
-        gpu().activation_backward(f, Tensor(), yg, V(b), dg, 0.1f);
+        cpu().activation_backward(f, Tensor(), yc, b, dc, 0.1f, true);
+        gpu().activation_backward(f, Tensor(), yg, V(b), dg, 0.1f, true);
         require_close(dc, dg, 1e-5f, 1e-5f, "backward from y");
       }
+      // Written, not accumulated: what was in d_x (NaN here) is ignored.
+      Tensor nan = Tensor::full(n, c, std::numeric_limits<float>::quiet_NaN());
+      Tensor dc0 = nan.clone(), dg0 = V(nan);
+      cpu().activation_backward(f, x, yc, b, dc0, 0.1f, false);
+      gpu().activation_backward(f, V(x), yg, V(b), dg0, 0.1f, false);
+      require_close(dc0, dg0, 1e-5f, 1e-5f, "backward written");
     }
   }
   SECTION("bias, column sums, sum, scalar broadcast") {
@@ -314,9 +321,16 @@ TEST_CASE("vulkan: batchnorm train / eval forward and backward", "[vulkan]") {
   require_close(rmc, rmg, 1e-4f, 1e-5f, "running_mean");
   require_close(rvc, rvg, 1e-4f, 1e-5f, "running_var");
   Tensor dxc = dx0.clone(), dgc = gamma.clone(), dbc = beta.clone(), dxg = V(dx0), dgg = V(gamma), dbg = V(beta);
-  cpu().batchnorm_train_backward(x, gamma, smc, sic, dy, dxc, dgc, dbc);
-  gpu().batchnorm_train_backward(V(x), V(gamma), smg, sig, V(dy), dxg, dgg, dbg);
+  cpu().batchnorm_train_backward(x, gamma, smc, sic, dy, dxc, dgc, dbc, true);
+  gpu().batchnorm_train_backward(V(x), V(gamma), smg, sig, V(dy), dxg, dgg, dbg, true);
   require_close(dxc, dxg, 1e-4f, 1e-4f, "train d_x");
+  {  // d_x written, not accumulated: its NaN contents are ignored
+    Tensor nan = Tensor::full(n, c, std::numeric_limits<float>::quiet_NaN());
+    Tensor dxc0 = nan.clone(), dxg0 = V(nan);
+    cpu().batchnorm_train_backward(x, gamma, smc, sic, dy, dxc0, Tensor(), Tensor(), false);
+    gpu().batchnorm_train_backward(V(x), V(gamma), smg, sig, V(dy), dxg0, Tensor(), Tensor(), false);
+    require_close(dxc0, dxg0, 1e-4f, 1e-4f, "train d_x written");
+  }
   require_close(dgc, dgg, 1e-4f, 1e-4f, "train d_gamma");
   require_close(dbc, dbg, 1e-4f, 1e-4f, "train d_beta");
   cpu().batchnorm_eval_forward(x, gamma, Tensor(), rm, rv, 1e-5f, yc);
@@ -354,10 +368,17 @@ TEST_CASE("vulkan: batchnorm fused with an activation (the Backend's composition
     gpu().batchnorm_act_apply(V(x), V(gamma), V(beta), 1e-5f, f, 0.1f, smg, afg, yg2);
     require_close(yc, yg2, 1e-4f, 1e-4f, "apply y");
     Tensor dxc = dx0.clone(), dgc = gamma.clone(), dbc = beta.clone(), dxg = V(dx0), dgg = V(gamma), dbg = V(beta);
-    cpu().batchnorm_act_train_backward(x, gamma, beta, 1e-5f, f, 0.1f, smc, sic, afc, dy, dxc, dgc, dbc, {});
+    cpu().batchnorm_act_train_backward(x, gamma, beta, 1e-5f, f, 0.1f, smc, sic, afc, dy, dxc, dgc, dbc, {}, true);
     gpu().batchnorm_act_train_backward(V(x), V(gamma), V(beta), 1e-5f, f, 0.1f, smg, sig, afg, V(dy), dxg, dgg, dbg,
-                                       {});
+                                       {}, true);
     require_close(dxc, dxg, 1e-4f, 1e-4f, "d_x");
+    Tensor nan = Tensor::full(n, c, std::numeric_limits<float>::quiet_NaN());
+    Tensor dxc0 = nan.clone(), dxg0 = V(nan);
+    cpu().batchnorm_act_train_backward(x, gamma, beta, 1e-5f, f, 0.1f, smc, sic, afc, dy, dxc0, Tensor(), Tensor(),
+                                       {}, false);
+    gpu().batchnorm_act_train_backward(V(x), V(gamma), V(beta), 1e-5f, f, 0.1f, smg, sig, afg, V(dy), dxg0,
+                                       Tensor(), Tensor(), {}, false);
+    require_close(dxc0, dxg0, 1e-4f, 1e-4f, "d_x written");
     require_close(dgc, dgg, 1e-4f, 1e-4f, "d_gamma");
     require_close(dbc, dbg, 1e-4f, 1e-4f, "d_beta");
   }

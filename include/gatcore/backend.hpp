@@ -49,8 +49,11 @@ class Backend {
   virtual void mul(const Tensor& a, const Tensor& b, const Tensor& y) = 0;
   virtual void mul_accumulate(const Tensor& b, const Tensor& d_y, const Tensor& d_a) = 0;
   virtual void activation_forward(Activation f, const Tensor& x, const Tensor& y, float slope) = 0;
+  // accumulate: d_x += the gradient; false: d_x = the gradient, d_x's
+  // contents ignored (a fresh buffer needs no zero fill; the same values as
+  // accumulating onto zeros). The BatchNorm backwards' accumulate_dx alike.
   virtual void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y,
-                                   const Tensor& d_x, float slope) = 0;
+                                   const Tensor& d_x, float slope, bool accumulate) = 0;
   virtual void row_softmax_forward(const Tensor& x, const Tensor& mask, const Tensor& y) = 0;
   virtual void row_softmax_backward(const Tensor& y, const Tensor& d_y, const Tensor& d_x) = 0;
   virtual void batchnorm_train_forward(const Tensor& x, const Tensor& gamma, const Tensor& beta, float eps,
@@ -62,7 +65,7 @@ class Backend {
                                       const Tensor& y) = 0;
   virtual void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
                                         const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
-                                        const Tensor& d_gamma, const Tensor& d_beta) = 0;
+                                        const Tensor& d_gamma, const Tensor& d_beta, bool accumulate_dx) = 0;
   virtual void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& running_mean,
                                        const Tensor& running_var, float eps, const Tensor& d_y, const Tensor& d_x,
                                        const Tensor& d_gamma, const Tensor& d_beta) = 0;
@@ -96,7 +99,7 @@ class Backend {
                                             Activation f, float slope, const Tensor& save_mean,
                                             const Tensor& save_invstd, const Tensor& save_affine, const Tensor& d_y,
                                             const Tensor& d_x, const Tensor& d_gamma, const Tensor& d_beta,
-                                            const SumAcross& across);
+                                            const SumAcross& across, bool accumulate_dx);
 
   // Reductions and losses into [1, 1] tensors; backward takes d_out as [1, 1].
   virtual void sum_all(const Tensor& x, const Tensor& out) = 0;

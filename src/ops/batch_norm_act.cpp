@@ -30,8 +30,9 @@ struct FusedBatchNorm {
       d_y = be->zeros(xv.rows(), xv.cols());
     }
     // A placeholder's rows are not in the batch: no gradient flows from them.
+    const GradTarget dx = placeholder ? GradTarget{} : grad_target(*be, xi);
     be->batchnorm_act_train_backward(xv, gamma.get(op), beta.get(op), eps, f, slope, mean, invstd, affine, d_y,
-                                     placeholder ? Tensor{} : grad_for(xi), grad_for(gi), grad_for(bi), across);
+                                     dx.grad, grad_for(gi), grad_for(bi), across, dx.accumulate);
   }
 };
 

@@ -208,7 +208,9 @@ Var activation(Activation f, const Var& x, float slope, const Var& into) {
     current_tape().record(op, [&be, f, slope, op, xi = x.impl(), yi = y.impl(), xs = SavedTensor(x.value(), "x"),
                                ys = SavedTensor(y.value(), "y")] {
       Tensor dy = yi->grad_if_any();
-      if (dy.defined()) be.activation_backward(f, xs.get(op), ys.get(op), dy, xi->grad_or_zeros(), slope);
+      if (!dy.defined()) return;
+      const GradTarget dx = grad_target(be, xi);
+      be.activation_backward(f, xs.get(op), ys.get(op), dy, dx.grad, slope, dx.accumulate);
     });
   return y;
 }
@@ -266,8 +268,9 @@ Var batch_norm(const Var& x, const Var& gamma, const Var& beta, BatchNormState& 
           return;
         }
         if (!dy.defined()) return;
-        be.batchnorm_train_backward(xs.get(op), gs.get(op), mean, invstd, dy, grad_for(xi), grad_for(gi),
-                                    grad_for(bi));
+        const GradTarget dx = grad_target(be, xi);
+        be.batchnorm_train_backward(xs.get(op), gs.get(op), mean, invstd, dy, dx.grad, grad_for(gi), grad_for(bi),
+                                    dx.accumulate);
       });
   } else {
     be.batchnorm_eval_forward(x.value(), gamma.value(), beta.value(), st.running_mean, st.running_var, eps,

@@ -43,21 +43,33 @@ inline void product(Backend& be, Precision p, const Tensor& A, bool trans_a, con
 inline Tensor grad_for(const ImplPtr& p) { return p && p->requires_grad ? p->grad_or_zeros() : Tensor{}; }
 inline ImplPtr impl_if(const Var& v) { return v.defined() ? v.impl() : nullptr; }
 
-// Runs kernel(grad, beta) for a kernel that computes grad = beta grad + term:
-// a parameter or tensor whose gradient has not arrived yet gets an
-// uninitialised buffer written with beta = 0 (no zero fill, no extra pass);
-// otherwise (also for every view, whose base may hold other gradients) it
-// accumulates with beta = 1. Either way the term is computed the same way, so
-// the result is bitwise the same as accumulating onto zeros.
+// Where an input's gradient goes, and whether a kernel adds to it: a
+// parameter or tensor whose gradient has not arrived yet gets an
+// uninitialised buffer to write (accumulate = false: no zero fill, no extra
+// pass); otherwise (also for every view, whose base may hold other
+// gradients) the kernel accumulates. An input without a gradient: undefined.
+struct GradTarget {
+  Tensor grad;
+  bool accumulate = true;
+};
+inline GradTarget grad_target(Backend& be, const ImplPtr& p) {
+  if (!p || !p->requires_grad) return {};
+  if (!p->base && !p->grad.defined()) {
+    p->grad = be.empty(p->value.rows(), p->value.cols());
+    return {p->grad, false};
+  }
+  return {p->grad_or_zeros(), true};
+}
+
+// Runs kernel(grad, beta) for a kernel that computes grad = beta grad + term
+// (grad_target: beta = 0 for a fresh buffer, else 1). Either way the term is
+// computed the same way, so the result is bitwise the same as accumulating
+// onto zeros.
 template <class F>
 void accumulate_grad(Backend& be, const ImplPtr& p, F&& kernel) {
   if (!p || !p->requires_grad) return;
-  if (!p->base && !p->grad.defined()) {
-    p->grad = be.empty(p->value.rows(), p->value.cols());
-    kernel(p->grad, 0.0f);
-  } else {
-    kernel(p->grad_or_zeros(), 1.0f);
-  }
+  const GradTarget t = grad_target(be, p);
+  kernel(t.grad, t.accumulate ? 1.0f : 0.0f);
 }
 
 // Adds the result of a kernel that *overwrites* its gradient output: straight

@@ -267,7 +267,7 @@ class VulkanBackend final : public Backend {
                 {static_cast<std::uint32_t>(f), fw(slope)});
   }
   void activation_backward(Activation f, const Tensor& x, const Tensor& y, const Tensor& d_y, const Tensor& d_x,
-                           float slope) override {
+                           float slope, bool accumulate) override {
     check_vk(d_y, "activation_backward: d_y");
     GATCORE_CHECK(f == Activation::identity || x.defined() || (y.defined() && f != Activation::tanhshrink),
                   "activation_backward(", activation_name(f), "): x: tensor is undefined");
@@ -276,6 +276,9 @@ class VulkanBackend final : public Backend {
     if (x.defined()) same(x, d_x, "activation_backward", "x", "d_x");
     if (y.defined()) same(y, d_x, "activation_backward", "y", "d_x");
     const bool use_y = y.defined() && (f == Activation::tanh || !x.defined());
+    // The shader accumulates; a fresh d_x is cleared first (on the GPU the
+    // fill is one more dispatch, not a serial pass).
+    if (!accumulate) fill(d_x, 0.0f);
     elementwise("activation_backward", d_x.rows(), d_x.cols(),
                 {{x, false}, {use_y ? y : Tensor(), false}, {d_y, false}, {d_x, true}},
                 {static_cast<std::uint32_t>(f), fw(slope), x.defined() ? 1u : 0u, use_y ? 1u : 0u});
@@ -312,9 +315,10 @@ class VulkanBackend final : public Backend {
   }
   void batchnorm_train_backward(const Tensor& x, const Tensor& gamma, const Tensor& save_mean,
                                 const Tensor& save_invstd, const Tensor& d_y, const Tensor& d_x,
-                                const Tensor& d_gamma, const Tensor& d_beta) override {
+                                const Tensor& d_gamma, const Tensor& d_beta, bool accumulate_dx) override {
     check_shape(save_mean, 1, x.cols(), "batchnorm_train_backward: save_mean");
     check_shape(save_invstd, 1, x.cols(), "batchnorm_train_backward: save_invstd");
+    if (!accumulate_dx && d_x.defined()) fill(d_x, 0.0f);  // the shader accumulates
     batchnorm_backward(0, x, gamma, save_mean, save_invstd, 0.0f, d_y, d_x, d_gamma, d_beta);
   }
   void batchnorm_eval_backward(const Tensor& x, const Tensor& gamma, const Tensor& rm, const Tensor& rv, float eps,
