@@ -164,6 +164,26 @@ TEST_CASE("bad checkpoint files are rejected with messages naming the file and t
     for (int k = 0; k < 8; ++k) len[std::size_t(k)] = char((hdr.size() >> (8 * k)) & 0xff);
     spit(bad, len + hdr);
     CHECK_THROWS_WITH(read_checkpoint_file(bad), Catch::Contains("do not match shape [4611686018427387904, 4]"));
+    // A tensor without data ([r, 0], [0, c]): no product to check, but a loop
+    // over 2^62 empty rows never ended (fuzz_checkpoint, tests/fuzz/found).
+    // Its sides are capped at 2^24; smaller empty tensors still read.
+    const auto with_tensor = [&](const std::string& shape) {
+      std::string h = ok.substr(8);
+      while (h.back() == ' ') h.pop_back();
+      h.pop_back();
+      h += ",\"norm.mean\":{\"dtype\":\"F32\",\"shape\":" + shape + ",\"data_offsets\":[0,0]}}";
+      std::string n(8, '\0');
+      for (int k = 0; k < 8; ++k) n[std::size_t(k)] = char((h.size() >> (8 * k)) & 0xff);
+      return n + h;
+    };
+    for (const char* shape : {"[4611686018427387903,0]", "[0,4611686018427387903]", "[16777217,0]"}) {
+      INFO(shape);
+      spit(bad, with_tensor(shape));
+      CHECK_THROWS_WITH(read_checkpoint_file(bad), Catch::Contains("out of range (a tensor without data may have at "
+                                                                   "most 16777216 rows or columns)"));
+    }
+    spit(bad, with_tensor("[16777216,0]"));  // read; then refused by its checksum (none in this header)
+    CHECK_THROWS_WITH(read_checkpoint_file(bad), Catch::Contains("checksum mismatch"));
     std::string huge = bytes;
     huge[7] = 0x7f;  // header length ~ 2^63
     rejects(huge, "header length");

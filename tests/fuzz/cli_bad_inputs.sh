@@ -34,6 +34,10 @@ for f in "$found"/*.glb; do
   check "$(basename "$f")" "$gat" info "$f"
   check "$(basename "$f")" "$gat" predict-weights --method bone-heat "$f" -o "$work/weights.glb"
 done
+for f in "$found"/*.gcm; do
+  check "$(basename "$f")" "$gat" info "$f"
+  check "$(basename "$f")" "$gat" eval --model "$f" --samples 1
+done
 # Training on datasets gat dataset build would refuse: refused before any work
 # (motion_stride 0 used to loop until the OOM killer).
 for d in cli_motion_stride_0 cli_dataset_out_of_range; do
