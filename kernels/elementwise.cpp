@@ -17,6 +17,7 @@ namespace {
 
 using detail::check_arg;
 using detail::for_each_row;
+using detail::with_output_base;
 
 
 // ---- tanh row kernels -----------------------------------------------------------
@@ -232,20 +233,12 @@ void activation_backward(Activation f, const Tensor& x, const Tensor& y, const T
                 f == Activation::tanhshrink ? " (tanhshrink needs x)" : " (and y is undefined too)");
   if (!d_x.defined()) return;
   check_arg(d_x, rows, n, "activation_backward: d_x");
-  // o = base + term, base = d_x (accumulate) or 0: writing adds the term to
-  // a zero, so a fresh gradient gets the bits of accumulating onto a
-  // zero-filled one without the fill (a pass over d_x, serial in memset).
+  // o = base + term (with_output_base): a fresh gradient is written without
+  // a zero fill first (a pass over d_x, serial in memset).
   const auto rows_loop = [&](auto term) {
-    if (accumulate)
-      for_each_row(rows, n, [&](std::int64_t r) {
-        float* o = d_x.row(r);
-        term(r, o, [](float* p) { return *p; });
-      });
-    else
-      for_each_row(rows, n, [&](std::int64_t r) {
-        float* o = d_x.row(r);
-        term(r, o, [](float*) { return 0.0f; });
-      });
+    with_output_base(accumulate, [&](auto base) {
+      for_each_row(rows, n, [&](std::int64_t r) { term(r, d_x.row(r), base); });
+    });
   };
   switch (f) {
     case Activation::identity:

@@ -33,6 +33,18 @@ inline void for_each_row(std::int64_t rows, std::int64_t cols, F&& f) {
   for (std::int64_t r = 0; r < rows; ++r) f(r);
 }
 
+// f(base) with base(p) the value an output element adds to: *p when
+// `accumulate`, else 0 (a fresh gradient buffer, its contents ignored). The
+// kernel writes base(o) + term: the bits of accumulating onto zeros, without
+// the zero fill.
+template <class F>
+inline void with_output_base(bool accumulate, F&& f) {
+  if (accumulate)
+    f([](const float* p) { return *p; });
+  else
+    f([](const float*) { return 0.0f; });
+}
+
 // Deterministic segmented column reduction.
 //   seg: row offsets of S segments (seg[0] = first row, seg[S] = end row).
 //   width: accumulators per row block (e.g. C, or 2C for two sums at once).

@@ -200,12 +200,11 @@ CheckpointFile parse_checkpoint_impl(std::string_view bytes, const std::string& 
     // empty one ([r, 0] or [0, c]) is not, and a loop over its 4.6e18 rows
     // (fuzz_checkpoint, tests/fuzz/found) never ends: its sides are capped.
     if (*r > std::uint64_t(std::numeric_limits<std::int64_t>::max()) ||
-        *c > std::uint64_t(std::numeric_limits<std::int64_t>::max()) ||
-        (elems == 0 && std::max(*r, *c) > kMaxEmptyTensorSide))
-      fail(path, detail::cat("tensor '", name, "': shape [", *r, ", ", *c, "] out of range",
-                             elems == 0 ? detail::cat(" (a tensor without data may have at most ", kMaxEmptyTensorSide,
-                                                      " rows or columns)")
-                                        : std::string{}));
+        *c > std::uint64_t(std::numeric_limits<std::int64_t>::max()))
+      fail(path, detail::cat("tensor '", name, "': shape [", *r, ", ", *c, "] out of range"));
+    if (elems == 0 && std::max(*r, *c) > kMaxEmptyTensorSide)
+      fail(path, detail::cat("tensor '", name, "': shape [", *r, ", ", *c, "] out of range (a tensor without data may ",
+                             "have at most ", kMaxEmptyTensorSide, " rows or columns)"));
     spans.emplace_back(*b, *e);
     Tensor t = Tensor::empty(std::int64_t(*r), std::int64_t(*c));
     if (elems != 0) std::memcpy(t.data(), bytes.data() + data_begin + *b, *e - *b);
