@@ -162,7 +162,7 @@ void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C, Row
   });
 }
 
-void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C) {
+void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C, RowBlockSink sink, void* ctx) {
   check_cpu_f32(A, "gemm_prepacked: A");
   check_cpu_f32(C, "gemm_prepacked: C");
   const std::int64_t m = A.rows(), k = A.cols(), n = B.n;
@@ -172,8 +172,13 @@ void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C) {
   GATCORE_CHECK(!detail::views_overlap(C, A), "gemm_prepacked: C ", C.shape_str(), " overlaps A ", A.shape_str(),
                 " (the output must not alias an input)");
   if (m == 0 || n == 0) return;
+  // The sink over every row block, after a product that did not hand them out.
+  const auto sink_all = [&] {
+    if (sink) for_row_blocks(m, n, k, [&](std::int64_t i0, std::int64_t rows) { sink(ctx, i0, rows); });
+  };
   if (k == 0) {
     for (std::int64_t r = 0; r < m; ++r) std::fill(C.row(r), C.row(r) + n, 0.0f);
+    sink_all();
     return;
   }
   const float* a = A.data();
@@ -186,6 +191,7 @@ void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C) {
     path = !B.bf16.empty() && bf16_supported() ? Path::bf16 : Path::bf16_portable;
   if (path == Path::gemm) {  // the same kernel choice as gemm() makes, on the plain copy
     gemm(A, false, B.plain, false, C, 1.0f, 0.0f);
+    sink_all();
     return;
   }
   for_row_blocks(m, n, k, [&](std::int64_t i0, std::int64_t rows) {
@@ -203,6 +209,7 @@ void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C) {
         detail::gemm_bf16_portable(a + i0 * lda, lda, rows, k, B.plain.data(), B.plain.ld(), n, c + i0 * ldc, ldc);
         break;
     }
+    if (sink) sink(ctx, i0, rows);
   });
 }
 

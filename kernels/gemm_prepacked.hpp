@@ -52,8 +52,13 @@ struct PrepackedB {
 
 // B: a [k, n] CPU f32 tensor (copied; B may change or go away afterwards).
 PrepackedB prepack_b(const Tensor& B, Precision precision);
+// With `sink`: each row block [i0, i0 + rows) of C is handed to sink(ctx,
+// i0, rows) by the thread that computed it, as soon as it is done (still in
+// cache; blocks of one call are disjoint, in any order across threads).
+using RowBlockSink = void (*)(void* ctx, std::int64_t i0, std::int64_t rows);
 // C [m, n] = A [m, k] times the packed B. C must not overlap A.
-void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C);
+void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C, RowBlockSink sink = nullptr,
+                    void* ctx = nullptr);
 
 // An A operand already rounded to bf16, as pair words: row i's columns
 // (2p, 2p + 1) in words[i * ld + p] (low half first; an odd column count's
@@ -70,11 +75,8 @@ struct Bf16Rows {
 void bf16_pairs(const Tensor& A, std::uint32_t* dst, std::int64_t ld);
 // C = A B for a bf16 packed B: bitwise gemm_prepacked on the float A these
 // words came from. The storage must hold A.rows + 24 rows of ld words (the
-// kernel's last register tile reads rows it does not store).
-// With `sink`: each row block [i0, i0 + rows) of C is handed to sink(ctx,
-// i0, rows) by the thread that computed it, as soon as it is done (still in
-// cache; blocks of one call are disjoint, in any order across threads).
-using RowBlockSink = void (*)(void* ctx, std::int64_t i0, std::int64_t rows);
+// kernel's last register tile reads rows it does not store). `sink`: as
+// for the fp32 A.
 void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C, RowBlockSink sink = nullptr,
                     void* ctx = nullptr);
 // A dense layer on bf16 rows, its output as bf16 rows for the next product:

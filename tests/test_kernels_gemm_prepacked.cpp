@@ -19,6 +19,7 @@
 #include "kernels/gemm.hpp"
 #include "kernels/gemm_bf16.hpp"
 #include "kernels/gemm_prepacked.hpp"
+#include "kernels/simd.hpp"
 #include "reference/bf16_reference.hpp"
 #include "reference/nn_reference.hpp"
 
@@ -232,8 +233,10 @@ TEST_CASE("gemm_prepacked_bias_act_bf16: the composition gemm_prepacked + add_ro
                     Catch::Contains("below 2 words"));
 }
 
-TEST_CASE("gemm_prepacked bf16 rows with a row-block sink: each block once, after its rows are final",
-          "[gemm_prepacked]") {
+// The sink of every A form: bf16 rows, and a float A with an fp32 or bf16
+// packed B, at the active SIMD level and at the scalar level (where the
+// fp32 product runs gemm() and hands the blocks out afterwards).
+TEST_CASE("gemm_prepacked with a row-block sink: each block once, after its rows are final", "[gemm_prepacked]") {
   Rng rng(37);
   struct Seen {
     const Tensor* c;
@@ -241,33 +244,46 @@ TEST_CASE("gemm_prepacked bf16 rows with a row-block sink: each block once, afte
     std::vector<int> rows;
     std::atomic<int> bad{0};
   };
-  for (const Mkn& s : {Mkn{1000, 130, 72}, Mkn{37, 17, 8}, Mkn{241, 0, 3}})
-    for (int threads : {1, 2}) {
-      Threads t(threads);
-      INFO("m " << s.m << " k " << s.k << " n " << s.n << " threads " << threads);
-      const Tensor A = random(rng, s.m, s.k, false), B = random(rng, s.k, s.n, false);
-      const cpu::PrepackedB P = cpu::prepack_b(B, Precision::bf16);
-      const std::int64_t ld = (s.k + 1) / 2 + 1;
-      std::vector<std::uint32_t> words(std::size_t((s.m + 24) * ld), 0u);
-      cpu::bf16_pairs(A, words.data(), ld);
-      const cpu::Bf16Rows rows{words.data(), s.m, s.k, ld};
-      Tensor want = Tensor::empty(s.m, s.n), got = Tensor::full(s.m, s.n, std::numeric_limits<float>::quiet_NaN());
-      cpu::gemm_prepacked(rows, P, want);
-      Seen seen{&got, &want, std::vector<int>(std::size_t(s.m), 0), {}};
-      cpu::gemm_prepacked(
-          rows, P, got,
-          [](void* ctx, std::int64_t i0, std::int64_t n) {
-            Seen& z = *static_cast<Seen*>(ctx);
-            for (std::int64_t i = i0; i < i0 + n; ++i) {
-              ++z.rows[std::size_t(i)];  // blocks are disjoint: no two threads write one entry
-              if (std::memcmp(z.c->row(i), z.want->row(i), sizeof(float) * std::size_t(z.c->cols())) != 0) ++z.bad;
-            }
-          },
-          &seen);
-      CHECK(seen.bad.load() == 0);  // the block's rows were final when the sink saw them
-      CHECK(std::count(seen.rows.begin(), seen.rows.end(), 1) == s.m);
-      CHECK(same_bits(got, want));
+  const cpu::RowBlockSink sink = [](void* ctx, std::int64_t i0, std::int64_t n) {
+    Seen& z = *static_cast<Seen*>(ctx);
+    for (std::int64_t i = i0; i < i0 + n; ++i) {
+      ++z.rows[std::size_t(i)];  // blocks are disjoint: no two threads write one entry
+      if (std::memcmp(z.c->row(i), z.want->row(i), sizeof(float) * std::size_t(z.c->cols())) != 0) ++z.bad;
     }
+  };
+  const cpu::SimdLevel active = cpu::simd_level();  // restored at the end (GATCORE_SIMD may have set it)
+  struct RestoreLevel {
+    cpu::SimdLevel l;
+    ~RestoreLevel() { cpu::set_simd_level(l); }
+  } restore{active};
+  enum class Form { bf16_rows, f32_a_f32_b, f32_a_bf16_b };
+  for (const cpu::SimdLevel level : {active, cpu::SimdLevel::scalar})
+    for (const Form form : {Form::bf16_rows, Form::f32_a_f32_b, Form::f32_a_bf16_b})
+      for (const Mkn& s : {Mkn{1000, 130, 72}, Mkn{37, 17, 8}, Mkn{241, 0, 3}})
+        for (int threads : {1, 2}) {
+          cpu::set_simd_level(level);
+          Threads t(threads);
+          INFO("level " << cpu::simd_level_name(level) << " form " << int(form) << " m " << s.m << " k " << s.k
+                        << " n " << s.n << " threads " << threads);
+          const Tensor A = random(rng, s.m, s.k, false), B = random(rng, s.k, s.n, false);
+          const cpu::PrepackedB P = cpu::prepack_b(B, form == Form::f32_a_f32_b ? Precision::fp32 : Precision::bf16);
+          const std::int64_t ld = (s.k + 1) / 2 + 1;
+          std::vector<std::uint32_t> words(std::size_t((s.m + 24) * ld), 0u);
+          cpu::bf16_pairs(A, words.data(), ld);
+          const cpu::Bf16Rows rows{words.data(), s.m, s.k, ld};
+          Tensor want = Tensor::empty(s.m, s.n), got = Tensor::full(s.m, s.n, std::numeric_limits<float>::quiet_NaN());
+          Seen seen{&got, &want, std::vector<int>(std::size_t(s.m), 0), {}};
+          if (form == Form::bf16_rows) {
+            cpu::gemm_prepacked(rows, P, want);
+            cpu::gemm_prepacked(rows, P, got, sink, &seen);
+          } else {
+            cpu::gemm_prepacked(A, P, want);
+            cpu::gemm_prepacked(A, P, got, sink, &seen);
+          }
+          CHECK(seen.bad.load() == 0);  // the block's rows were final when the sink saw them
+          CHECK(std::count(seen.rows.begin(), seen.rows.end(), 1) == s.m);
+          CHECK(same_bits(got, want));
+        }
 }
 
 TEST_CASE("gemm_prepacked bf16 is not fp32: a product that bf16 rounding changes", "[gemm_prepacked]") {

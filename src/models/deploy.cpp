@@ -12,7 +12,7 @@
 #include "gatcore/vulkan.hpp"
 #include "kernels/attention_projection.hpp"
 #include "kernels/batchnorm.hpp"
-#include "kernels/gat_epilogue_bf16.hpp"
+#include "kernels/gat_epilogue.hpp"
 #include "kernels/gemm_prepacked.hpp"
 
 namespace gatcore::models {
@@ -339,7 +339,6 @@ DeployPlan::~DeployPlan() {
 
 namespace {
 
-// nn::GatBlock::forward (eval) of `x` into `out`.
 // Columns [c0, c1) of a shadowed buffer, as the bf16 A operand of a product.
 cpu::Bf16Rows shadow_rows(const Shadow& s, std::int64_t n, std::int64_t c0, std::int64_t c1) {
   return {s.words.data() + c0 / 2, n, c1 - c0, s.ld};
@@ -349,6 +348,7 @@ void shadow_update(Shadow* s, const Tensor& buf, std::int64_t c0, std::int64_t c
   if (s) cpu::bf16_pairs(buf.cols_slice(c0, c1), s->words.data() + c0 / 2, s->ld);
 }
 
+// nn::GatBlock::forward (eval) of `x` into `out`.
 // (CPU: z is the first kf columns of zs, whose last self_width columns get the self stream's product.)
 // With shadows (CPU bf16): xw is x as bf16 rows, and the block's output goes
 // only to `out_words` (its columns of the shadow, `out_ld` words per row),
@@ -359,29 +359,39 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
                const cpu::Bf16Rows* xw = nullptr, std::uint32_t* out_words = nullptr, std::int64_t out_ld = 0) {
   const std::int64_t kf = s.kf();
   const bool cpu = be.device() == Device::cpu;
-  if (xw) {
-    // The attention projection of each row block of z as soon as the product has it (still in cache).
+  // CPU at the AVX-512 level: the product hands each row block of z to the
+  // attention projection while it is still in cache, and the attention, the
+  // self stream's bias, tanhshrink and BatchNorm's map run in one pass
+  // (gat_attention_epilogue*), bitwise the composition below.
+  const bool fused = cpu && (xw || cpu::gat_epilogue_supported());
+  if (fused) {
     struct Proj {
       const Tensor &z, &a_dst, &a_src, &el, &er;
     } proj{z, s.att_dst, s.att_src, el, er};
-    cpu::gemm_prepacked(*xw, s.Wp, zs, [](void* c, std::int64_t i0, std::int64_t rows) {
+    const cpu::RowBlockSink sink = [](void* c, std::int64_t i0, std::int64_t rows) {
       const Proj& p = *static_cast<const Proj*>(c);
       cpu::attention_projection_forward_rows(p.z, p.a_dst, p.a_src, p.el, p.er, i0, i0 + rows);
-    }, &proj);
-  } else {
-    if (cpu)
-      cpu::gemm_prepacked(x, s.Wp, zs);
+    };
+    if (xw)
+      cpu::gemm_prepacked(*xw, s.Wp, zs, sink, &proj);
     else
-      be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
-    be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
-  }
-  if (out_words) {  // attention and epilogue in one pass; reads the self stream's product where the GEMM left it
-    cpu::gat_attention_epilogue_bf16(g, z, el, er, s.slope, alpha,
-                                     s.self_width > 0 ? zs.cols_slice(kf, kf + s.self_width) : Tensor{},
-                                     s.self_width > 0 ? s.self_b : Tensor{}, s.bn ? s.bn_mean : Tensor{}, s.bn_scale,
-                                     s.bn_shift, out_words, out_ld);
+      cpu::gemm_prepacked(x, s.Wp, zs, sink, &proj);
+    // The self stream's product is where the GEMM left it.
+    const Tensor self = s.self_width > 0 ? zs.cols_slice(kf, kf + s.self_width) : Tensor{};
+    const Tensor self_b = s.self_width > 0 ? s.self_b : Tensor{};
+    const Tensor mean = s.bn ? s.bn_mean : Tensor{};
+    if (out_words)
+      cpu::gat_attention_epilogue_bf16(g, z, el, er, s.slope, alpha, self, self_b, mean, s.bn_scale, s.bn_shift,
+                                       out_words, out_ld);
+    else
+      cpu::gat_attention_epilogue(g, z, el, er, s.slope, alpha, self, self_b, mean, s.bn_scale, s.bn_shift, out);
     return;
   }
+  if (cpu)
+    cpu::gemm_prepacked(x, s.Wp, zs);
+  else
+    be.gemm(x, false, s.W, false, z, 1.0f, 0.0f);
+  be.attention_projection_forward(z, s.att_dst, s.att_src, el, er);
   be.gat_fused_additive_forward(g, z, el, er, s.slope, both.cols_slice(0, kf), alpha);
   if (s.self_width > 0) {
     const Tensor self = both.cols_slice(kf, kf + s.self_width);
