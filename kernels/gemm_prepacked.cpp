@@ -70,6 +70,10 @@ void for_row_blocks(std::int64_t m, std::int64_t n, std::int64_t k, F&& f) {
 #pragma omp parallel for schedule(static) if (blocks > 1 && flops >= kParallelMinFlops)
   for (std::int64_t blk = 0; blk < blocks; ++blk) f(blk * kRowBlock, std::min(kRowBlock, m - blk * kRowBlock));
 }
+// The sink over every row block, after a product that did not hand them out.
+void sink_all_blocks(std::int64_t m, std::int64_t n, std::int64_t k, RowBlockSink sink, void* ctx) {
+  if (sink) for_row_blocks(m, n, k, [&](std::int64_t i0, std::int64_t rows) { sink(ctx, i0, rows); });
+}
 }  // namespace
 
 void bf16_pairs(const Tensor& A, std::uint32_t* dst, std::int64_t ld) {
@@ -136,8 +140,7 @@ void gemm_prepacked(const Bf16Rows& A, const PrepackedB& B, const Tensor& C, Row
   if (m == 0 || n == 0) return;
   if (k == 0) {
     for (std::int64_t r = 0; r < m; ++r) std::fill(C.row(r), C.row(r) + n, 0.0f);
-    if (sink)
-      for (std::int64_t i0 = 0; i0 < m; i0 += kRowBlock) sink(ctx, i0, std::min(kRowBlock, m - i0));
+    sink_all_blocks(m, n, k, sink, ctx);
     return;
   }
   float* c = C.data();
@@ -172,13 +175,9 @@ void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C, RowBl
   GATCORE_CHECK(!detail::views_overlap(C, A), "gemm_prepacked: C ", C.shape_str(), " overlaps A ", A.shape_str(),
                 " (the output must not alias an input)");
   if (m == 0 || n == 0) return;
-  // The sink over every row block, after a product that did not hand them out.
-  const auto sink_all = [&] {
-    if (sink) for_row_blocks(m, n, k, [&](std::int64_t i0, std::int64_t rows) { sink(ctx, i0, rows); });
-  };
   if (k == 0) {
     for (std::int64_t r = 0; r < m; ++r) std::fill(C.row(r), C.row(r) + n, 0.0f);
-    sink_all();
+    sink_all_blocks(m, n, k, sink, ctx);
     return;
   }
   const float* a = A.data();
@@ -191,7 +190,7 @@ void gemm_prepacked(const Tensor& A, const PrepackedB& B, const Tensor& C, RowBl
     path = !B.bf16.empty() && bf16_supported() ? Path::bf16 : Path::bf16_portable;
   if (path == Path::gemm) {  // the same kernel choice as gemm() makes, on the plain copy
     gemm(A, false, B.plain, false, C, 1.0f, 0.0f);
-    sink_all();
+    sink_all_blocks(m, n, k, sink, ctx);
     return;
   }
   for_row_blocks(m, n, k, [&](std::int64_t i0, std::int64_t rows) {

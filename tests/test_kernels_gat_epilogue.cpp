@@ -59,21 +59,17 @@ std::size_t mismatches(const Tensor& want, const Tensor& wide, std::int64_t W, f
 }  // namespace
 
 TEST_CASE("gat_epilogue and gat_epilogue_bf16 refuse where they cannot run", "[gat_epilogue]") {
-  const cpu::SimdLevel active = cpu::simd_level();  // restored at the end (GATCORE_SIMD may have set it)
-  struct RestoreLevel {
-    cpu::SimdLevel l;
-    ~RestoreLevel() { cpu::set_simd_level(l); }
-  } restore{active};
-  // Below AVX-512 both refuse, naming what is missing (the deploy path composes instead).
-  cpu::set_simd_level(cpu::SimdLevel::scalar);
-  CHECK_FALSE(cpu::gat_epilogue_supported());
-  CHECK_THROWS_WITH(cpu::gat_epilogue(Tensor::zeros(2, 4), Tensor{}, Tensor{}, Tensor{}, Tensor{}, Tensor{},
-                                      Tensor::zeros(2, 4)),
-                    Catch::Contains("gat_epilogue: needs the AVX-512 SIMD level (active: scalar)"));
-  CHECK_THROWS_WITH(cpu::gat_epilogue_bf16(Tensor::zeros(2, 4), Tensor{}, Tensor{}, Tensor{}, Tensor{}, Tensor{},
-                                           nullptr, 2),
-                    Catch::Contains("AVX512_BF16"));
-  cpu::set_simd_level(active);
+  {
+    // Below AVX-512 both refuse, naming what is missing (the deploy path composes instead).
+    Simd scalar(cpu::SimdLevel::scalar);
+    CHECK_FALSE(cpu::gat_epilogue_supported());
+    CHECK_THROWS_WITH(cpu::gat_epilogue(Tensor::zeros(2, 4), Tensor{}, Tensor{}, Tensor{}, Tensor{}, Tensor{},
+                                        Tensor::zeros(2, 4)),
+                      Catch::Contains("gat_epilogue: needs the AVX-512 SIMD level (active: scalar)"));
+    CHECK_THROWS_WITH(cpu::gat_epilogue_bf16(Tensor::zeros(2, 4), Tensor{}, Tensor{}, Tensor{}, Tensor{}, Tensor{},
+                                             nullptr, 2),
+                      Catch::Contains("AVX512_BF16"));
+  }
   if (!cpu::gat_epilogue_supported()) return;
   // Bad destinations name the argument.
   const Tensor a = Tensor::zeros(4, 8);

@@ -251,17 +251,13 @@ TEST_CASE("gemm_prepacked with a row-block sink: each block once, after its rows
       if (std::memcmp(z.c->row(i), z.want->row(i), sizeof(float) * std::size_t(z.c->cols())) != 0) ++z.bad;
     }
   };
-  const cpu::SimdLevel active = cpu::simd_level();  // restored at the end (GATCORE_SIMD may have set it)
-  struct RestoreLevel {
-    cpu::SimdLevel l;
-    ~RestoreLevel() { cpu::set_simd_level(l); }
-  } restore{active};
+  const cpu::SimdLevel active = cpu::simd_level();  // GATCORE_SIMD may have set it
   enum class Form { bf16_rows, f32_a_f32_b, f32_a_bf16_b };
   for (const cpu::SimdLevel level : {active, cpu::SimdLevel::scalar})
     for (const Form form : {Form::bf16_rows, Form::f32_a_f32_b, Form::f32_a_bf16_b})
       for (const Mkn& s : {Mkn{1000, 130, 72}, Mkn{37, 17, 8}, Mkn{241, 0, 3}})
         for (int threads : {1, 2}) {
-          cpu::set_simd_level(level);
+          Simd simd(level);
           Threads t(threads);
           INFO("level " << cpu::simd_level_name(level) << " form " << int(form) << " m " << s.m << " k " << s.k
                         << " n " << s.n << " threads " << threads);
