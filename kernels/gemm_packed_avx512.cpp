@@ -13,7 +13,10 @@
 //   - A: read in place (rows, or columns when transposed); only a bottom
 //     partial tile of MR rows is packed, zero-padded;
 //   - micro-kernel: MR x NR accumulators in registers (12 x 2 or 24 x 1 zmm),
-//     one broadcast FMA per row and vector per k.
+//     one broadcast FMA per row and vector per k; a last panel of <= 16
+//     columns (the GAT blocks' n = 72 = 64 + 8) runs 12 x 1 on it, with
+//     the same sums (a 12 x 2 tile there spent half its FMAs on masked
+//     lanes: a quarter of those products' time).
 // Every C element is summed over k in one fixed order (k blocks in order,
 // then k within a block), a function of the shape only: results do not
 // depend on the thread count.
@@ -154,10 +157,11 @@ void pack_b(const GemmArgs& g, std::int64_t k0, std::int64_t kc, std::int64_t j0
 // element (r, k) is at a[r * sr + k * sk]: ROWS = true reads MR rows of a
 // row-major op(A) in place (sr = lda, sk = 1); ROWS = false reads a packed
 // panel (sr = 1, sk = MR) or a transposed A in place (sr = 1, sk = lda).
-template <int MR, int NV, bool ROWS>
+// BS: floats per k of the B panel (its NR; a 1-vector kernel on the last,
+// narrow panel of a 2-vector product reads that product's wider panel).
+template <int MR, int NV, bool ROWS, int BS = 16 * NV>
 void micro_kernel(std::int64_t kc, const float* __restrict a, std::int64_t stride, const float* __restrict bp,
                   float* c, std::int64_t ldc, int mr_eff, int nr_eff, float alpha, float beta) {
-  constexpr int NR = 16 * NV;
   __m512 acc[MR][NV];
 #pragma GCC unroll 32
   for (int r = 0; r < MR; ++r)
@@ -166,7 +170,7 @@ void micro_kernel(std::int64_t kc, const float* __restrict a, std::int64_t strid
   for (std::int64_t k = 0; k < kc; ++k) {
     __m512 b[NV];
 #pragma GCC unroll 2
-    for (int v = 0; v < NV; ++v) b[v] = _mm512_load_ps(bp + k * NR + 16 * v);
+    for (int v = 0; v < NV; ++v) b[v] = _mm512_load_ps(bp + k * BS + 16 * v);
     const float* ak = ROWS ? a + k : a + k * stride;
 #pragma GCC unroll 32
     for (int r = 0; r < MR; ++r) {
@@ -238,6 +242,29 @@ void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf, const float* 
         for (std::int64_t jr = 0; jr < nc; jr += NR) {
           const int nr_eff = int(std::min<std::int64_t>(NR, nc - jr));
           const float* bp = bblock + jr * kc;
+          // A last panel of <= 16 columns (n = 72: 64 + 8) runs the kernel of
+          // one vector per row on the same panel: half the FMAs of a
+          // two-vector tile whose second vector is all mask, the same sums.
+          if constexpr (NV == 2) {
+            if (nr_eff <= 16) {
+              for (std::int64_t ir = 0; ir < mc; ir += MR) {
+                const std::int64_t i = i0 + ir;
+                float* c = g.c + i * g.ldc + j0 + jr;
+                const int mr_eff = int(std::min<std::int64_t>(MR, g.m - i));
+                if (pack_a_blocks)
+                  micro_kernel<MR, 1, false, NR>(kc, buf.a + ir * kc, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
+                else if (i >= m_full)
+                  micro_kernel<MR, 1, false, NR>(kc, buf.a, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
+                else if (g.trans_a)
+                  micro_kernel<MR, 1, false, NR>(kc, g.a + k0 * g.lda + i, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha,
+                                                 beta);
+                else
+                  micro_kernel<MR, 1, true, NR>(kc, g.a + i * g.lda + k0, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha,
+                                                beta);
+              }
+              continue;
+            }
+          }
           for (std::int64_t ir = 0; ir < mc; ir += MR) {
             const std::int64_t i = i0 + ir;
             float* c = g.c + i * g.ldc + j0 + jr;
