@@ -357,6 +357,36 @@ void add_row_bias(const Tensor& bias, const Tensor& y) {
   });
 }
 
+void bias_activation_rows(const Tensor& bias, Activation f, const Tensor& lin, const Tensor& y, std::int64_t r0,
+                          std::int64_t r1) {
+  check_cpu_f32(lin, "bias_activation_rows: lin");
+  const std::int64_t n = lin.cols();
+  if (bias.defined()) check_arg(bias, 1, n, "bias_activation_rows: bias");
+  GATCORE_CHECK(f == Activation::identity || f == Activation::tanh || f == Activation::tanhshrink,
+                "bias_activation_rows: activation ", activation_name(f), " (identity, tanh or tanhshrink only)");
+  if (y.defined()) check_arg(y, lin.rows(), n, "bias_activation_rows: y");
+  GATCORE_CHECK(f == Activation::identity || y.defined(), "bias_activation_rows: ", activation_name(f),
+                " needs an output");
+  GATCORE_CHECK(0 <= r0 && r0 <= r1 && r1 <= lin.rows(), "bias_activation_rows: rows [", r0, ", ", r1,
+                ") outside the ", lin.rows(), " rows");
+  const float* bp = bias.defined() ? bias.data() : nullptr;
+  const TanhRowFn fn = f == Activation::tanh ? tanh_row_fn<kTanhFwd>()
+                       : f == Activation::tanhshrink ? tanh_row_fn<kShrinkFwd>()
+                                                     : nullptr;
+  const bool copy = f == Activation::identity && y.defined() && !(y.data() == lin.data() && y.ld() == lin.ld());
+  for (std::int64_t r = r0; r < r1; ++r) {
+    float* lp = lin.row(r);
+    if (bp) {
+#pragma omp simd
+      for (std::int64_t c = 0; c < n; ++c) lp[c] += bp[c];
+    }
+    if (fn)
+      fn(lp, nullptr, y.row(r), n);
+    else if (copy)
+      std::memmove(y.row(r), lp, n * sizeof(float));
+  }
+}
+
 // ---- reductions ------------------------------------------------------------------
 
 void column_sums_accumulate(const Tensor& d_y, const Tensor& d_bias) {

@@ -27,6 +27,14 @@ void mul(const Tensor& a, const Tensor& b, const Tensor& y);
 void mul_accumulate(const Tensor& b, const Tensor& d_y, const Tensor& d_a);
 // y[i,:] += bias[0,:]   (bias: [1, C])
 void add_row_bias(const Tensor& bias, const Tensor& y);
+// Rows [r0, r1) of a dense layer's finish: lin += bias (bias [1, C] or
+// undefined), then y = f(lin) (f identity: y undefined, or lin itself, or
+// a copy). Bitwise add_row_bias then activation_forward on those rows, but
+// serial and on a few rows: a product's row-block sink runs it inside the
+// product's parallel region while the block is in cache (gemm_prepacked.hpp).
+// f: identity, tanh or tanhshrink (throws otherwise).
+void bias_activation_rows(const Tensor& bias, Activation f, const Tensor& lin, const Tensor& y, std::int64_t r0,
+                          std::int64_t r1);
 // d_bias[0,c] += Σ_i d_y[i,c]   (deterministic blocked column sums)
 void column_sums_accumulate(const Tensor& d_y, const Tensor& d_bias);
 // Σ of all entries in double precision.

@@ -375,6 +375,60 @@ TEST_CASE("activations: in place and argument errors", "[elementwise][activation
 
 // ==== other elementwise kernels and reductions ===============================================
 
+TEST_CASE("bias_activation_rows: bitwise add_row_bias then activation_forward on its rows, every SIMD level",
+          "[elementwise][activation]") {
+  // A dense layer's finish per row block (the deploy path's product sink):
+  // rows [r0, r1) only, lin updated in place, y = f(lin); rows outside the
+  // range untouched; strided tensors; no bias.
+  Rng rng(33);
+  for (auto level : simd_levels()) {
+    Simd simd(level);
+    for (const Shape& s : {Shape{1, 1}, Shape{17, 33}, Shape{300, 64}, Shape{130, 512}})
+      for (Activation f : {Activation::identity, Activation::tanh, Activation::tanhshrink})
+        for (int strided = 0; strided < 2; ++strided)
+          for (int with_bias = 0; with_bias < 2; ++with_bias) {
+            INFO("level " << level_name(level) << " shape " << s.r << "x" << s.c << " " << activation_name(f)
+                          << " strided " << strided << " bias " << with_bias);
+            const Tensor lin0 = random(rng, s.r, s.c, strided);
+            const Tensor bias = with_bias ? random(rng, 1, s.c, !strided) : Tensor{};
+            // The composition, over every row.
+            const Tensor want_lin = lin0.clone();
+            if (with_bias) cpu::add_row_bias(bias, want_lin);
+            const Tensor want_y = make(s.r, s.c, strided);
+            cpu::activation_forward(f, want_lin, want_y);
+            // The rows in two ranges (a block boundary inside), as sinks hand them out.
+            const Tensor lin = lin0.clone();
+            const Tensor y = make(s.r, s.c, !strided);
+            y.fill_(-7.0f);
+            const std::int64_t mid = s.r / 3;
+            cpu::bias_activation_rows(bias, f, lin, f == Activation::identity && strided ? Tensor{} : y, mid, s.r);
+            std::int64_t touched = 0;
+            for (std::int64_t r = 0; r < mid; ++r)  // not yet: untouched
+              for (std::int64_t c = 0; c < s.c; ++c) touched += lin.at(r, c) != lin0.at(r, c) || y.at(r, c) != -7.0f;
+            CHECK(touched == 0);
+            cpu::bias_activation_rows(bias, f, lin, f == Activation::identity && strided ? Tensor{} : y, 0, mid);
+            std::int64_t differ = 0;
+            for (std::int64_t r = 0; r < s.r; ++r)
+              for (std::int64_t c = 0; c < s.c; ++c) {
+                differ += lin.at(r, c) != want_lin.at(r, c);
+                if (f != Activation::identity || !strided) differ += y.at(r, c) != want_y.at(r, c);
+                else differ += y.at(r, c) != -7.0f;  // identity without an output writes none
+              }
+            CHECK(differ == 0);
+            REQUIRE(pad_intact(y));
+          }
+  }
+  const Tensor lin = Tensor::zeros(4, 3), y = Tensor::zeros(4, 3);
+  CHECK_THROWS_WITH(cpu::bias_activation_rows(Tensor{}, Activation::relu, lin, y, 0, 4), Contains("relu"));
+  CHECK_THROWS_WITH(cpu::bias_activation_rows(Tensor{}, Activation::tanh, lin, Tensor{}, 0, 4),
+                    Contains("needs an output"));
+  CHECK_THROWS_WITH(cpu::bias_activation_rows(Tensor::zeros(1, 2), Activation::tanh, lin, y, 0, 4),
+                    Contains("bias_activation_rows: bias"));
+  CHECK_THROWS_WITH(cpu::bias_activation_rows(Tensor{}, Activation::tanh, lin, y, 2, 5), Contains("outside the 4 rows"));
+  CHECK_THROWS_WITH(cpu::bias_activation_rows(Tensor{}, Activation::tanh, lin, Tensor::zeros(3, 3), 0, 3),
+                    Contains("bias_activation_rows: y"));
+}
+
 TEST_CASE("axpby, axpy, mul, mul_accumulate, add_row_bias, fill", "[elementwise]") {
   Rng rng(31);
   for (const Shape& s : kShapes)
