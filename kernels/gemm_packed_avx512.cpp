@@ -242,42 +242,31 @@ void gemm_blocked(const GemmArgs& g, std::int64_t k, Buffers& buf, const float* 
         for (std::int64_t jr = 0; jr < nc; jr += NR) {
           const int nr_eff = int(std::min<std::int64_t>(NR, nc - jr));
           const float* bp = bblock + jr * kc;
-          // A last panel of <= 16 columns (n = 72: 64 + 8) runs the kernel of
+          // The register tiles down the row block, NVK vectors wide.
+          const auto tiles = [&]<int NVK>() {
+            for (std::int64_t ir = 0; ir < mc; ir += MR) {
+              const std::int64_t i = i0 + ir;
+              float* c = g.c + i * g.ldc + j0 + jr;
+              const int mr_eff = int(std::min<std::int64_t>(MR, g.m - i));
+              if (pack_a_blocks)
+                micro_kernel<MR, NVK, false, NR>(kc, buf.a + ir * kc, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
+              else if (i >= m_full)
+                micro_kernel<MR, NVK, false, NR>(kc, buf.a, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
+              else if (g.trans_a)
+                micro_kernel<MR, NVK, false, NR>(kc, g.a + k0 * g.lda + i, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha,
+                                                 beta);
+              else
+                micro_kernel<MR, NVK, true, NR>(kc, g.a + i * g.lda + k0, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha,
+                                                beta);
+            }
+          };
+          // A last panel of <= 16 columns (n = 72: 64 + 8) runs the tile of
           // one vector per row on the same panel: half the FMAs of a
           // two-vector tile whose second vector is all mask, the same sums.
-          if constexpr (NV == 2) {
-            if (nr_eff <= 16) {
-              for (std::int64_t ir = 0; ir < mc; ir += MR) {
-                const std::int64_t i = i0 + ir;
-                float* c = g.c + i * g.ldc + j0 + jr;
-                const int mr_eff = int(std::min<std::int64_t>(MR, g.m - i));
-                if (pack_a_blocks)
-                  micro_kernel<MR, 1, false, NR>(kc, buf.a + ir * kc, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
-                else if (i >= m_full)
-                  micro_kernel<MR, 1, false, NR>(kc, buf.a, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
-                else if (g.trans_a)
-                  micro_kernel<MR, 1, false, NR>(kc, g.a + k0 * g.lda + i, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha,
-                                                 beta);
-                else
-                  micro_kernel<MR, 1, true, NR>(kc, g.a + i * g.lda + k0, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha,
-                                                beta);
-              }
-              continue;
-            }
-          }
-          for (std::int64_t ir = 0; ir < mc; ir += MR) {
-            const std::int64_t i = i0 + ir;
-            float* c = g.c + i * g.ldc + j0 + jr;
-            const int mr_eff = int(std::min<std::int64_t>(MR, g.m - i));
-            if (pack_a_blocks)
-              micro_kernel<MR, NV, false>(kc, buf.a + ir * kc, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
-            else if (i >= m_full)
-              micro_kernel<MR, NV, false>(kc, buf.a, MR, bp, c, g.ldc, mr_eff, nr_eff, g.alpha, beta);
-            else if (g.trans_a)
-              micro_kernel<MR, NV, false>(kc, g.a + k0 * g.lda + i, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha, beta);
-            else
-              micro_kernel<MR, NV, true>(kc, g.a + i * g.lda + k0, g.lda, bp, c, g.ldc, MR, nr_eff, g.alpha, beta);
-          }
+          if (NV == 2 && nr_eff <= 16)
+            tiles.template operator()<1>();
+          else
+            tiles.template operator()<NV>();
         }
       }
     }
