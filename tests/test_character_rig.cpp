@@ -14,6 +14,7 @@
 #include "gatcore/character/rig/rig_convention.hpp"
 #include "gatcore/error.hpp"
 #include "rig_fixtures.hpp"
+#include "src/character/rig/weld.hpp"
 
 using namespace gatcore::character;
 using Catch::Matchers::Contains;
@@ -319,4 +320,28 @@ TEST_CASE("the structural fallback reads unnamed rigs whichever way they face", 
     for (const char* part : {"thigh.l", "shin.r", "foot.l", "upperarm.l", "forearm.r", "hand.r", "head"})
       CHECK(lm.at(s.names[m.find(part)]) == landmark_of_part(part));
   }
+}
+
+TEST_CASE("weld: positions 1e38 apart and a zero tolerance weld by distance; bad input is refused",
+          "[character][rig][weld]") {
+  // Finite floats whose differences overflow float (the fuzzer's glTF): the
+  // cells are computed in double, the duplicates still merge, the rest stay.
+  const std::vector<std::vector<std::pair<int, float>>> one(4, {{0, 1.0f}});
+  Character ch;
+  ch.name = "wide";
+  weld_into(ch, {-3e38f, 0, 0, -3e38f, 0, 0, 3e38f, 1, 0, 0.5f, 0.5f, 0.5f}, one, {0, 2, 3, 1, 2, 3}, 1e-6f);
+  CHECK(ch.welded_from_file == std::vector<std::int32_t>{0, 0, 1, 2});
+  CHECK(ch.mesh.num_vertices() == 3);
+  CHECK(ch.mesh.triangles == std::vector<std::int32_t>{0, 1, 2, 0, 1, 2});
+  // A tolerance of 0: cells of 1e-30, far past any integer; exact duplicates only.
+  Character z;
+  z.name = "zero";
+  weld_into(z, {0, 0, 0, 0, 0, 0, 1, 0, 0, 1, 1e-7f, 0}, one, {}, 0.0f);
+  CHECK(z.welded_from_file == std::vector<std::int32_t>{0, 0, 1, 2});
+  Character bad;
+  bad.name = "bad";
+  CHECK_THROWS_WITH(weld_into(bad, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, one, {}, std::nanf("")),
+                    Catch::Contains("bad") && Catch::Contains("weld tolerance"));
+  CHECK_THROWS_WITH(weld_into(bad, {0, 0, 0, 1, 0, 0, 0, INFINITY, 0, 0, 0, 1}, one, {}, 1e-6f),
+                    Catch::Contains("vertex 2 is not finite"));
 }

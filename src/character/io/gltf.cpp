@@ -131,6 +131,27 @@ struct Reader {
   }
 };
 
+// glTF requires POSITION's min and max, with every position inside them. A
+// corrupt buffer's positions (finite, yet 1e38 apart where the accessor
+// declares a 2-unit box) otherwise load, and the weld merges the mesh into a
+// handful of vertices without a word. Slack: 1 % of the box's size or
+// magnitude, above any exporter's rounding of the bounds and a Draco
+// decoder's quantisation error (8 bits: 0.2 %).
+void check_position_bounds(const Reader& rd, int index, const std::vector<float>& p, const std::string& what) {
+  const tinygltf::Accessor& a = rd.m.accessors[static_cast<std::size_t>(index)];
+  if (a.minValues.size() != 3 || a.maxValues.size() != 3) return;  // not declared: nothing to hold them to
+  double size = 1e-6;
+  for (int c = 0; c < 3; ++c)
+    size = std::max({size, a.maxValues[c] - a.minValues[c], std::abs(a.minValues[c]), std::abs(a.maxValues[c])});
+  const double slack = 0.01 * size;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const int c = static_cast<int>(i % 3);
+    if (!(p[i] >= a.minValues[c] - slack && p[i] <= a.maxValues[c] + slack))
+      rd.fail(what, ": vertex ", i / 3, " has ", "xyz"[c], " = ", p[i], ", outside the accessor's declared min ",
+              a.minValues[c], " / max ", a.maxValues[c], " (accessor ", index, "; a corrupt buffer or bounds)");
+  }
+}
+
 using gltf_util::node_local;
 using gltf_util::node_matrix;
 
@@ -386,6 +407,7 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
       if (attr("JOINTS_0") < 0 || attr("WEIGHTS_0") < 0)
         rd.fail(what, " is on skinned node ", n, " but has no JOINTS_0 / WEIGHTS_0 (missing skin weights)");
       const std::vector<float> p = rd.floats(attr("POSITION"), 3, what + " POSITION");
+      check_position_bounds(rd, attr("POSITION"), p, what + " POSITION");
       const std::size_t nv = p.size() / 3;
       const std::int64_t base = static_cast<std::int64_t>(pos.size() / 3);
       pos.insert(pos.end(), p.begin(), p.end());

@@ -1,27 +1,42 @@
 #include "src/character/rig/weld.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <unordered_map>
+
+#include "gatcore/error.hpp"
 
 namespace gatcore::character {
 
 void weld_into(Character& ch, const std::vector<float>& pos, const std::vector<std::vector<std::pair<int, float>>>& infl,
                const std::vector<std::int32_t>& tris, float tolerance) {
   const std::int64_t nfile = static_cast<std::int64_t>(pos.size() / 3);
+  GATCORE_CHECK(std::isfinite(tolerance) && tolerance >= 0.0f, ch.name, ": the weld tolerance must be a finite ",
+                "fraction >= 0 of the diagonal, got ", tolerance);
   if (nfile == 0) return;
-  // Weld by position (hash grid with cells of the tolerance).
-  float lo[3], hi[3];
+  for (std::int64_t i = 0; i < 3 * nfile; ++i)
+    GATCORE_CHECK(std::isfinite(pos[i]), ch.name, ": vertex ", i / 3, " is not finite (", pos[i], ")");
+  // Weld by position (hash grid with cells of the tolerance). In double: a
+  // file's finite floats can span more than FLT_MAX (3e38 and -3e38), whose
+  // float difference is infinite and made the cells NaN.
+  double lo[3], hi[3];
   for (int c = 0; c < 3; ++c) lo[c] = hi[c] = pos[c];
   for (std::int64_t v = 0; v < nfile; ++v)
     for (int c = 0; c < 3; ++c) {
-      lo[c] = std::min(lo[c], pos[3 * v + c]);
-      hi[c] = std::max(hi[c], pos[3 * v + c]);
+      lo[c] = std::min(lo[c], double(pos[3 * v + c]));
+      hi[c] = std::max(hi[c], double(pos[3 * v + c]));
     }
-  const double diag = std::sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) + (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                                (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                (hi[2] - lo[2]) * (hi[2] - lo[2]));
   const double tol = std::max(static_cast<double>(tolerance) * diag, 1e-30);
-  auto cell = [&](std::int64_t v, int c) { return static_cast<std::int64_t>(std::floor((pos[3 * v + c] - lo[c]) / tol)); };
+  // Cells past +-2^52 (a tolerance of 0 over a metre-sized mesh, a vertex
+  // far from the rest) share the edge cell: the distance test below still
+  // decides every weld, so a shared cell costs comparisons, not correctness.
+  auto cell = [&](std::int64_t v, int c) {
+    const double x = std::floor((double(pos[3 * v + c]) - lo[c]) / tol);
+    return static_cast<std::int64_t>(std::min(x, 0x1p52));
+  };
   auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
     return static_cast<std::uint64_t>(x) * 73856093ULL ^ static_cast<std::uint64_t>(y) * 19349663ULL ^
            static_cast<std::uint64_t>(z) * 83492791ULL;
@@ -40,7 +55,10 @@ void weld_into(Character& ch, const std::vector<float>& pos, const std::vector<s
           for (auto it = range.first; it != range.second; ++it) {
             const std::int64_t u = first_file[it->second];
             double d2 = 0.0;
-            for (int c = 0; c < 3; ++c) d2 += (double)(pos[3 * u + c] - pos[3 * v + c]) * (pos[3 * u + c] - pos[3 * v + c]);
+            for (int c = 0; c < 3; ++c) {
+              const double e = double(pos[3 * u + c]) - double(pos[3 * v + c]);
+              d2 += e * e;
+            }
             if (d2 <= tol * tol) {
               found = it->second;
               break;
