@@ -10,7 +10,8 @@
 //                              deploy path (models/deploy.hpp: weights packed
 //                              once, buffers allocated once), which gat deform
 //                              and the runtime run; fp32 gives predict's
-//                              numbers bitwise, _bf16 bf16 products
+//                              numbers bitwise, _bf16 bf16 products;
+//                              counter scratch_MiB: the plan's activations
 //   model_peak_rss/<name>      peak resident memory of a fresh gatbench process
 //                              that only builds the workload and runs training
 //                              steps (--gatbench_peak_rss, bench_main.cpp)
@@ -100,6 +101,7 @@ void model_infer_deploy(benchmark::State& state, gatcore::Precision precision) {
   // run() normalises input() in place: with the identity normaliser the input stays the same.
   gatbench::run(state, gatbench::Cost{0, c.flops, n},
                 [&] { benchmark::DoNotOptimize(c.plan->run().data()); });
+  state.counters["scratch_MiB"] = double(c.plan->scratch_bytes()) / (1024.0 * 1024.0);  // activations, not weights
 }
 BENCHMARK_CAPTURE(model_infer_deploy, densegats, gatcore::Precision::fp32)
     ->ArgName("nodes")->Arg(10000)->UseRealTime()->Unit(benchmark::kMillisecond);

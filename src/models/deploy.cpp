@@ -6,6 +6,7 @@
 // change to a model's forward must be mirrored here.
 #include "gatcore/models/deploy.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "gatcore/backend.hpp"
@@ -297,33 +298,49 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
       B.o_alpha.push_back(be.empty(E, L.heads));
     }
   } else {
+    // CPU: a tanh layer's output overwrites its pre-activation (tanh's
+    // kernels are elementwise and run in place, and nothing reads the
+    // pre-activation again): the paper's head 512-128 saves 25.6 MB at 10k
+    // vertices. Other backends keep two buffers (a shader does not bind one
+    // buffer as both input and output).
+    const auto act_buffer = [&](const DenseStep& s, const Tensor& lin) {
+      if (s.act == Activation::identity) return Tensor{};
+      return M.device == Device::cpu && s.act == Activation::tanh ? lin : be.empty(n_, s.W.cols());
+    };
     for (std::size_t k = 0; k < M.transform.size(); ++k) {
       B.t_lin.push_back(be.empty(n_, M.transform[k].W.cols()));
-      B.t_act.push_back(k + 1 < M.transform.size() ? be.empty(n_, M.transform[k].W.cols()) : Tensor{});
+      B.t_act.push_back(k + 1 < M.transform.size() ? act_buffer(M.transform[k], B.t_lin.back()) : Tensor{});
     }
-    for (std::size_t m = 0; m < M.modules.size(); ++m)
-      B.mod.push_back(be.empty(n_, M.module_in[m] + std::int64_t(M.modules[m].size()) * M.modules[m].front().width()));
     const GatStep& g = M.modules.front().front();
     // Shadows need every column range they hold to start at an even column
     // (pairs): the module inputs and the block widths even (the paper's 32 and 72).
     bool even = g.width() % 2 == 0;
     for (std::int64_t w : M.module_in) even = even && w % 2 == 0;
-    if (M.device == Device::cpu && M.precision == Precision::bf16 && even)
-      for (const Tensor& t : B.mod) B.mod_bf16.push_back(shadow_for(n_, t.cols()));
+    const bool shadows = M.device == Device::cpu && M.precision == Precision::bf16 && even && !M.head.empty();
+    for (std::size_t m = 0; m < M.modules.size(); ++m) {
+      const std::int64_t cols = M.module_in[m] + std::int64_t(M.modules[m].size()) * M.modules[m].front().width();
+      if (shadows) B.mod_bf16.push_back(shadow_for(n_, cols));
+      // With shadows every GAT block writes and reads only the bf16 words:
+      // the floats are the input transform's output alone, which is then
+      // shadowed (the modules' float columns would be 60 MB at 10k vertices
+      // on the paper's sizes, never touched).
+      B.mod.push_back(!shadows ? be.empty(n_, cols) : m == 0 ? be.empty(n_, M.module_in[0]) : Tensor{});
+    }
     if (M.device == Device::cpu) {
       B.zs = be.empty(n_, g.width());
       B.z = B.zs.cols_slice(0, g.kf());
     } else {
       B.z = be.empty(n_, g.kf());
     }
-    B.both = be.empty(n_, g.width());
-    B.tsh = g.bn ? be.empty(n_, g.width()) : Tensor{};
+    // both / tsh only serve the unfused GAT block (gat_block allocates them
+    // there on first use): the fused CPU path at the AVX-512 level never
+    // touches them, and at 10k vertices they are 5.8 MB.
     B.el = be.empty(n_, g.heads);
     B.er = be.empty(n_, g.heads);
     B.alpha = be.empty(E, g.heads);
     for (std::size_t k = 0; k < M.head.size(); ++k) {
       B.h_lin.push_back(be.empty(n_, M.head[k].W.cols()));
-      B.h_act.push_back(M.head[k].act != Activation::identity ? be.empty(n_, M.head[k].W.cols()) : Tensor{});
+      B.h_act.push_back(act_buffer(M.head[k], B.h_lin.back()));
       if (!B.mod_bf16.empty() && k + 1 < M.head.size()) B.head_bf16.push_back(shadow_for(n_, M.head[k].W.cols()));
     }
   }
@@ -336,6 +353,26 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
 
 DeployPlan::~DeployPlan() {
   if (model_ && model_->device == Device::vulkan) vulkan::forget_graph(graph_.get());
+}
+
+std::int64_t DeployPlan::scratch_bytes() const {
+  const Buffers& B = *buf_;
+  std::vector<const Storage*> seen;  // views (z of zs, x of x_host_) count once
+  std::int64_t bytes = 0;
+  const auto add = [&](const Tensor& t) {
+    if (!t.defined() || std::find(seen.begin(), seen.end(), t.storage().get()) != seen.end()) return;
+    seen.push_back(t.storage().get());
+    bytes += std::int64_t(t.storage()->bytes);
+  };
+  for (const Tensor* t : {&x_host_, &y_host_, &B.x, &B.z, &B.zs, &B.both, &B.tsh, &B.el, &B.er, &B.alpha, &B.skip_lin,
+                          &B.skip_out})
+    add(*t);
+  for (const auto* v : {&B.t_lin, &B.t_act, &B.h_lin, &B.h_act, &B.mod, &B.o_z, &B.o_y, &B.o_act, &B.o_el, &B.o_er,
+                        &B.o_alpha})
+    for (const Tensor& t : *v) add(t);
+  for (const auto* v : {&B.mod_bf16, &B.head_bf16})
+    for (const Shadow& sh : *v) bytes += std::int64_t(sh.words.size() * sizeof(std::uint32_t));
+  return bytes;
 }
 
 namespace {
@@ -388,6 +425,8 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
       cpu::gat_attention_epilogue(g, z, el, er, s.slope, alpha, self, self_b, mean, s.bn_scale, s.bn_shift, out);
     return;
   }
+  if (!both.defined()) both = be.empty(z.rows(), s.width());
+  if (s.bn && !tsh.defined()) tsh = be.empty(z.rows(), s.width());
   if (cpu)
     cpu::gemm_prepacked(x, s.Wp, zs);
   else
@@ -499,18 +538,19 @@ const Tensor& DeployPlan::run() {
       for (const GatStep& s : M.modules[m]) {
         const std::int64_t lo = M.dense ? 0 : prev;
         const cpu::Bf16Rows xw = shadows ? shadow_rows(B.mod_bf16[m], n_, lo, c0) : cpu::Bf16Rows{};
-        gat_block(be, g, s, buf.cols_slice(lo, c0), buf.cols_slice(c0, c0 + bw), B.z, B.zs, B.both, B.tsh, B.el,
-                  B.er, B.alpha, shadows ? &xw : nullptr,
+        // Shadowed: no float input or output (the words are both).
+        gat_block(be, g, s, shadows ? Tensor{} : buf.cols_slice(lo, c0), shadows ? Tensor{} : buf.cols_slice(c0, c0 + bw),
+                  B.z, B.zs, B.both, B.tsh, B.el, B.er, B.alpha, shadows ? &xw : nullptr,
                   shadows ? B.mod_bf16[m].words.data() + c0 / 2 : nullptr, shadows ? B.mod_bf16[m].ld : 0);
         prev = c0;
         c0 += bw;
       }
       const std::int64_t lo = M.dense ? 0 : prev;
-      y = buf.cols_slice(lo, c0);
+      y = shadows ? Tensor{} : buf.cols_slice(lo, c0);
       if (shadows) yw = shadow_rows(B.mod_bf16[m], n_, lo, c0);
       if (m + 1 < M.modules.size()) {
-        gat_block(be, g, M.transitions[m], y, B.mod[m + 1].cols_slice(0, M.module_in[m + 1]), B.z, B.zs, B.both,
-                  B.tsh, B.el, B.er, B.alpha, shadows ? &yw : nullptr,
+        gat_block(be, g, M.transitions[m], y, shadows ? Tensor{} : B.mod[m + 1].cols_slice(0, M.module_in[m + 1]), B.z,
+                  B.zs, B.both, B.tsh, B.el, B.er, B.alpha, shadows ? &yw : nullptr,
                   shadows ? B.mod_bf16[m + 1].words.data() : nullptr, shadows ? B.mod_bf16[m + 1].ld : 0);
       }
     }

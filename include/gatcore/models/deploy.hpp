@@ -66,6 +66,12 @@ class DeployPlan {
   // Normalises input() in place, runs the model, returns [n, out_dim] host
   // predictions divided by the target scale (models::predict's values).
   const Tensor& run();
+  // Bytes of the activations and scratch this plan holds (host or device;
+  // the model's weights are the DeployModel's): what embedding one
+  // character costs besides the model. Buffers only some kernels need
+  // (the unfused GAT block's) are allocated by the first run() that needs
+  // them, so the figure can grow once.
+  std::int64_t scratch_bytes() const;
 
  private:
   struct Buffers;
