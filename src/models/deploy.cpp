@@ -332,9 +332,15 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
     } else {
       B.z = be.empty(n_, g.kf());
     }
-    // both / tsh only serve the unfused GAT block (gat_block allocates them
-    // there on first use): the fused CPU path at the AVX-512 level never
-    // touches them, and at 10k vertices they are 5.8 MB.
+    // both / tsh only serve the unfused GAT block: the fused CPU path (the
+    // AVX-512 level, or bf16 shadows) never touches them, and at 10k
+    // vertices they are 5.8 MB. Allocated here when this plan will take the
+    // unfused path, so that run() allocates nothing; gat_block allocates
+    // them itself if the SIMD level is lowered after the plan was built.
+    if (M.device != Device::cpu || !(shadows || cpu::gat_epilogue_supported())) {
+      B.both = be.empty(n_, g.width());
+      B.tsh = g.bn ? be.empty(n_, g.width()) : Tensor{};
+    }
     B.el = be.empty(n_, g.heads);
     B.er = be.empty(n_, g.heads);
     B.alpha = be.empty(E, g.heads);

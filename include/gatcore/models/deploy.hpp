@@ -68,9 +68,11 @@ class DeployPlan {
   const Tensor& run();
   // Bytes of the activations and scratch this plan holds (host or device;
   // the model's weights are the DeployModel's): what embedding one
-  // character costs besides the model. Buffers only some kernels need
-  // (the unfused GAT block's) are allocated by the first run() that needs
-  // them, so the figure can grow once.
+  // character costs besides the model. Buffers only the unfused GAT block
+  // needs are allocated when the plan is built for that path; a plan built
+  // at the AVX-512 level and run after the SIMD level was lowered
+  // (cpu::set_simd_level) allocates them in that run, so the figure can
+  // grow once.
   std::int64_t scratch_bytes() const;
 
  private:
