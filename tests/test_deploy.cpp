@@ -129,7 +129,8 @@ TEST_CASE("a bf16 DeployPlan keeps the GAT modules only as bf16: less scratch th
   DeployPlan b16(make_deploy_model(*m, norm, Device::cpu, Precision::bf16), data[1].graph);
   f32.input().copy_from_(data[1].features);
   f32.run();
-  // The fp32 plan's module buffers: every module's input and block columns, as floats.
+  // The fp32 plan's module buffers as floats, a lower bound: every module's
+  // block columns, and the first module's input width (32) for each.
   const std::int64_t n = data[1].graph->num_nodes, width = 64 + 8;
   const std::int64_t module_floats = n * 4 * (cfg.modules * (32 + cfg.blocks * width));
   // The bf16 plan holds them as bf16 pairs: at most half a float's bytes per

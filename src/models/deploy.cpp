@@ -252,6 +252,14 @@ namespace {
 // CPU bf16: a bf16 copy of a DenseNet buffer, kept in step as its columns are
 // written, so each product reads its prefix as bf16 (half the bytes) instead
 // of every later block re-converting the whole prefix.
+// The unfused GAT block's scratch for `n` rows of step `s` (every block has
+// its width): the attention's and the self stream's output, and with
+// BatchNorm tanhshrink's before the affine. Allocated once, then kept.
+void unfused_scratch(Backend& be, std::int64_t n, const GatStep& s, Tensor& both, Tensor& tsh) {
+  if (!both.defined()) both = be.empty(n, s.width());
+  if (s.bn && !tsh.defined()) tsh = be.empty(n, s.width());
+}
+
 struct Shadow {
   std::vector<std::uint32_t, cpu::Aligned64<std::uint32_t>> words;
   std::int64_t ld = 0;  // words per row
@@ -337,10 +345,8 @@ DeployPlan::DeployPlan(std::shared_ptr<const DeployModel> model, GraphPtr graph)
     // vertices they are 5.8 MB. Allocated here when this plan will take the
     // unfused path, so that run() allocates nothing; gat_block allocates
     // them itself if the SIMD level is lowered after the plan was built.
-    if (M.device != Device::cpu || !(shadows || cpu::gat_epilogue_supported())) {
-      B.both = be.empty(n_, g.width());
-      B.tsh = g.bn ? be.empty(n_, g.width()) : Tensor{};
-    }
+    if (M.device != Device::cpu || !(shadows || cpu::gat_epilogue_supported()))
+      unfused_scratch(be, n_, g, B.both, B.tsh);
     B.el = be.empty(n_, g.heads);
     B.er = be.empty(n_, g.heads);
     B.alpha = be.empty(E, g.heads);
@@ -431,8 +437,7 @@ void gat_block(Backend& be, const CsrGraph& g, const GatStep& s, const Tensor& x
       cpu::gat_attention_epilogue(g, z, el, er, s.slope, alpha, self, self_b, mean, s.bn_scale, s.bn_shift, out);
     return;
   }
-  if (!both.defined()) both = be.empty(z.rows(), s.width());
-  if (s.bn && !tsh.defined()) tsh = be.empty(z.rows(), s.width());
+  unfused_scratch(be, z.rows(), s, both, tsh);
   if (cpu)
     cpu::gemm_prepacked(x, s.Wp, zs);
   else
