@@ -300,6 +300,97 @@ TEST_CASE("skinweights-any and bone heat give the same weights in centimetres an
   }
 }
 
+namespace {
+// Vertices whose weights differ by more than tol (L1 over their joints).
+int count_different(const SkinWeights& a, const SkinWeights& b, double tol) {
+  REQUIRE(a.num_vertices() == b.num_vertices());
+  int differ = 0;
+  for (std::int64_t v = 0; v < a.num_vertices(); ++v) {
+    std::map<std::int32_t, double> w;
+    for (std::int64_t e = a.ptr[v]; e < a.ptr[v + 1]; ++e) w[a.joint[e]] += a.weight[e];
+    for (std::int64_t e = b.ptr[v]; e < b.ptr[v + 1]; ++e) w[b.joint[e]] -= b.weight[e];
+    double d = 0;
+    for (const auto& [j, x] : w) d += std::abs(x);
+    differ += d > tol;
+  }
+  return differ;
+}
+}  // namespace
+
+TEST_CASE("skinweights-any that ignores the world columns gives a turned character the same weights", "[skin_any]") {
+  // Turned a quarter about the vertical axis (exactly: the matrix holds 0 and
+  // +-1), every bone-relative column is unchanged -- distances, positions
+  // along and off the bone, height above it, lengths, depth, bone heat --
+  // while the vertex's world position and normal are not. Jittered as above:
+  // no two bones tie for nearest.
+  Character c = posefix::humanoid(3);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> J(-2e-3f, 2e-3f);
+  std::map<std::array<float, 3>, std::array<float, 3>> moved;
+  for (std::size_t i = 0; i + 2 < c.mesh.positions.size(); i += 3) {
+    float* x = &c.mesh.positions[i];
+    const auto [it, fresh] = moved.try_emplace({x[0], x[1], x[2]}, std::array<float, 3>{});
+    if (fresh) it->second = {x[0] + J(rng), x[1] + J(rng), x[2] + J(rng)};
+    for (int d = 0; d < 3; ++d) x[d] = it->second[std::size_t(d)];
+  }
+  Mat4 turn = mat4_identity();
+  turn[0] = turn[10] = 0.0f;
+  turn[2] = -1.0f;  // x -> -z
+  turn[8] = 1.0f;   // z -> x
+  Character turned = c;
+  for (std::size_t i = 0; i + 2 < c.mesh.positions.size(); i += 3) {
+    const Vec3 p = transform_point(turn, {c.mesh.positions[i], c.mesh.positions[i + 1], c.mesh.positions[i + 2]});
+    for (int d = 0; d < 3; ++d) turned.mesh.positions[i + std::size_t(d)] = p[std::size_t(d)];
+  }
+  for (std::int32_t j = 0; j < c.skeleton.num_joints(); ++j) {
+    turned.skeleton.inverse_bind[std::size_t(j)] = mul(c.skeleton.inverse_bind[std::size_t(j)], inverse(turn));
+    if (c.skeleton.parents[std::size_t(j)] < 0)
+      turned.skeleton.root_parent[std::size_t(j)] = mul(turn, c.skeleton.root_parent[std::size_t(j)]);
+  }
+  const int k = 4;
+  const PreparedCharacter pc = prepare_character(c, DeltaMushParams{0, 0.5f});
+  const PreparedCharacter pt = prepare_character(turned, DeltaMushParams{0, 0.5f});
+  const models::Sample sc = bone_candidate_sample(pc, k), st = bone_candidate_sample(pt, k);
+  // The fixture turned the character: the world columns moved, the pair columns did not.
+  double world = 0, pair = 0;
+  for (std::int64_t v = 0; v < sc.features.rows(); ++v)
+    for (std::int64_t j = 0; j < sc.features.cols(); ++j) {
+      const double d = std::abs(double(sc.features.at(v, j)) - st.features.at(v, j));
+      (j < kVertexColumns ? world : pair) = std::max(j < kVertexColumns ? world : pair, d);
+    }
+  REQUIRE(world > 0.1);
+  REQUIRE(pair < 1e-3);
+
+  models::ModelConfig cfg = small_any_config(k);
+  auto model = models::make_model(cfg, 5);
+  randomise_last_layer(*model, 10);
+  models::Normaliser norm = models::Normaliser::fit({sc}, false);
+  CHECK_FALSE(ignores_world_columns(norm));
+  SECTION("using them, the weights turn with the world columns") {
+    const WeightPrediction p = predict_skin_weights_any(*model, norm, c, 3);
+    const WeightPrediction q = predict_skin_weights_any(*model, norm, turned, 3);
+    CHECK(count_different(p.weights, q.weights, 1e-2) > 10);
+  }
+  SECTION("ignoring them, the weights are the same") {
+    const Tensor before = norm.inv_std.clone();
+    ignore_world_columns(norm);
+    CHECK(ignores_world_columns(norm));
+    for (std::int64_t j = 0; j < norm.inv_std.cols(); ++j)
+      CHECK(norm.inv_std.at(0, j) == (j < kVertexColumns ? 0.0f : before.at(0, j)));
+    const WeightPrediction p = predict_skin_weights_any(*model, norm, c, 3);
+    const WeightPrediction q = predict_skin_weights_any(*model, norm, turned, 3);
+    CHECK(count_different(p.weights, q.weights, 1e-3) == 0);
+  }
+  SECTION("a normaliser without the vertex columns is refused") {
+    models::Normaliser narrow;
+    narrow.mean = Tensor::zeros(1, 4);
+    narrow.inv_std = Tensor::zeros(1, 4);
+    CHECK_THROWS_AS(ignore_world_columns(narrow), InvalidArgument);
+    CHECK_FALSE(ignores_world_columns(narrow));
+    CHECK_FALSE(ignores_world_columns(models::Normaliser{}));
+  }
+}
+
 TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates", "[skin_any]") {
   // The log prior and the zero last layer: softmax(log(h + eps)) over the
   // valid candidates, h bone heat's unpruned weight of the candidate joint

@@ -5,7 +5,8 @@
 # accuracy, deformation error at the two worst of --poses random poses).
 #
 #   examples/experiments/unseen_skeletons.sh [--folds "women creatures khronos"] [--minutes M]
-#       [--sampling consecutive|random|full] [--pair-scorer W,...] [--precision fp32|bf16] [--seed S]
+#       [--sampling consecutive|random|full] [--pair-scorer W,...] [--world-columns ignore|use]
+#       [--precision fp32|bf16] [--seed S]
 #       [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
@@ -34,7 +35,10 @@
 # skinweights-any starts as bone heat over each vertex's 8 nearest bones (its
 # logits' prior) and learns corrections to it; --pair-scorer W scores every
 # (vertex, candidate) with one shared MLP of hidden width W (gat train
-# --pair-scorer). --precision bf16 trains both models with bf16 products
+# --pair-scorer). --world-columns use lets skinweights-any read the vertex's
+# world-frame position and normal (gat train --world-columns; the default,
+# ignore, gives it only quantities measured from the character's own bones).
+# --precision bf16 trains both models with bf16 products
 # (gat train --precision; fp32 where the CPU lacks AVX512_BF16, as gat train
 # says). The super-skeleton models
 # (neuroskinning, fc) cannot name the bones of an unseen family's skeleton, so
@@ -48,7 +52,7 @@ set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= precision=fp32
+folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= world_columns= precision=fp32
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/examples/gat"
@@ -61,6 +65,7 @@ while [ $# -gt 0 ]; do
     --poses) poses="${2:?--poses needs a value}"; shift 2 ;;
     --sampling) sampling="${2:?--sampling needs a value}"; shift 2 ;;
     --pair-scorer) pair_scorer="${2:?--pair-scorer needs widths}"; shift 2 ;;
+    --world-columns) world_columns="${2:?--world-columns needs ignore or use}"; shift 2 ;;
     --precision) precision="${2:?--precision needs fp32 or bf16}"; shift 2 ;;
     --out) out="${2:?--out needs a directory}"; shift 2 ;;
     --data) data="${2:?--data needs a directory}"; shift 2 ;;
@@ -131,6 +136,7 @@ for fold in $folds; do
   log "$fold: bone heat done"
   "$gat" train --model skinweights-any --data "$dir/dataset.json" --seed "$seed" --epochs 100000 --minutes "$minutes" \
     --val-every 1 --batch 4 --sample-vertices 512 --sampling "$sampling" ${pair_scorer:+--pair-scorer "$pair_scorer"} \
+    ${world_columns:+--world-columns "$world_columns"} \
     --precision "$precision" --out "$dir/skinweights-any.gcm" \
     --keep-best "$dir/skinweights-any.best.gcm" >"$dir/skinweights-any.train.log" 2>&1 \
     || { cat "$dir/skinweights-any.train.log" >&2; die "training on $fold failed"; }

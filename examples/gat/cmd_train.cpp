@@ -8,7 +8,6 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -56,6 +55,7 @@ struct TrainArgs {
   double minutes = 0;  // 0: no time budget
   long val_every = 1, sample_vertices = 0;
   std::vector<std::int64_t> pair_scorer;
+  std::string world_columns;  // skinweights-any: use | ignore; empty: the default (or a resumed checkpoint's)
   bool linear_skip = false;
   gat::CommonOptions common;
 };
@@ -146,6 +146,12 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "(e.g. 64) from the vertex's context and the pair's columns, instead of a classifier output column "
                "per candidate slot")
       ->delimiter(',')->check(int_in(1, 4096));
+  c.add_option("--world-columns", a->world_columns,
+               "skinweights-any: the vertex's world-frame rest position and normal, the only inputs not measured "
+               "from the character's own bones: ignore (default; they normalise to 0, so the model cannot learn where "
+               "a humanoid keeps its head and apply it to a spider) or use (the models before 2026-12-04). Recorded "
+               "in the checkpoint's normaliser; a resumed or fine-tuned model keeps its own")
+      ->check(CLI::IsMember({"use", "ignore"}));
   c.add_option("--keep-best", a->keep_best,
                "also write the checkpoint of the epoch with the best validation figure so far (--keep-best-by) to "
                "this path (--out stays the latest epoch, to resume from; a resumed run continues from the loss "
@@ -390,6 +396,21 @@ int run_train(TrainArgs a) {
   // A fine-tuned model keeps the statistics its weights were trained with
   // (and its linear skip, trained along).
   if (from.empty()) norm = Normaliser::fit(train, cfg.task == Task::displacement);
+  if (any_skeleton) {
+    // A new model ignores the world-frame columns unless told to use them; a
+    // checkpoint's normaliser already says which it does.
+    if (from.empty() && a.world_columns != "use") character::ignore_world_columns(norm);
+    if (!from.empty() && !a.world_columns.empty() &&
+        (a.world_columns == "ignore") != character::ignores_world_columns(norm)) {
+      std::fprintf(stderr, "gat train: --world-columns %s: %s %s them; a resumed or fine-tuned model keeps its own\n",
+                   a.world_columns.c_str(), from.c_str(),
+                   character::ignores_world_columns(norm) ? "ignores" : "uses");
+      return 2;
+    }
+  } else if (!a.world_columns.empty()) {
+    std::fprintf(stderr, "gat train: --world-columns applies to skinweights-any, not %s\n", cfg.name.c_str());
+    return 2;
+  }
   if (from.empty() && cfg.linear_skip) {
     const LinearMap f = fit_linear_skip(*model, train, norm);
     if (!quiet)
@@ -467,6 +488,8 @@ int run_train(TrainArgs a) {
         if (loaded.file.metadata.count(k)) extra[k] = loaded.file.metadata.at(k);
     }
     extra["skeleton"] = character::joined_bone_names(td->super);
+    if (any_skeleton)  // for people reading the checkpoint; the normaliser is what predictions follow
+      extra["world_columns"] = character::ignores_world_columns(norm) ? "ignore" : "use";
     if (!any_skeleton && td->nearest_joints == 0) {
       // Which bones every training character had: a character lacking one of
       // them feeds the model an input it never saw (gat deform and

@@ -1,5 +1,7 @@
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 
+#include "gatcore/error.hpp"
+
 namespace gatcore::character {
 
 models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, BoneCandidates* candidates) {
@@ -26,6 +28,19 @@ std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, Dat
     out.push_back(std::move(m));
   }
   return out;
+}
+
+void ignore_world_columns(models::Normaliser& norm) {
+  GATCORE_CHECK(norm.defined() && norm.inv_std.rows() == 1 && norm.inv_std.cols() >= kVertexColumns,
+                "ignore_world_columns: the normaliser has no ", kVertexColumns, " vertex columns");
+  for (int c = 0; c < kVertexColumns; ++c) norm.inv_std.at(0, c) = 0.0f;
+}
+
+bool ignores_world_columns(const models::Normaliser& norm) {
+  if (!norm.defined() || norm.inv_std.rows() != 1 || norm.inv_std.cols() < kVertexColumns) return false;
+  for (int c = 0; c < kVertexColumns; ++c)
+    if (norm.inv_std.at(0, c) != 0.0f) return false;
+  return true;
 }
 
 }  // namespace gatcore::character

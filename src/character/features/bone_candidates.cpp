@@ -10,7 +10,7 @@
 
 namespace gatcore::character {
 
-std::int64_t bone_candidate_feature_dim(int k) { return 6 + static_cast<std::int64_t>(k) * kPairFeatures; }
+std::int64_t bone_candidate_feature_dim(int k) { return kVertexColumns + static_cast<std::int64_t>(k) * kPairFeatures; }
 
 BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
   const Character& ch = pc.character;

@@ -17,4 +17,17 @@ models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, BoneCan
 
 std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, DatasetPart part, int k);
 
+// The vertex columns of the bone-candidate features (rest position and
+// normal) are the only ones measured in the world frame rather than from the
+// character's own bones. A model that reads them can learn where a body part
+// sits in a humanoid's frame (the head at the top, the hands at the sides),
+// which means nothing on a quadruped, a spider or a mech. This makes `norm`
+// ignore them: their inv_std becomes 0, so each normalises to 0 whatever the
+// character (Normaliser's rule for a constant column), in training and, since
+// the checkpoint stores the normaliser, in every prediction. (gat train
+// --world-columns ignore; docs/RESULTS.md, issue #15, tenth pass.)
+void ignore_world_columns(models::Normaliser& norm);
+// Whether `norm` (of bone-candidate features) ignores them.
+bool ignores_world_columns(const models::Normaliser& norm);
+
 }  // namespace gatcore::character

@@ -26,6 +26,7 @@
 
 namespace gatcore::character {
 
+inline constexpr int kVertexColumns = 6;  // rest position (3), rest normal (3): the world frame's columns
 inline constexpr int kPairFeatures = 10;
 inline constexpr int kDefaultCandidates = 8;
 inline constexpr int kBoneHeatPairColumn = 9;  // bone heat's weight, within a candidate's columns
