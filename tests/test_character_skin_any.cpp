@@ -260,23 +260,28 @@ int count_different(const SkinWeights& a, const SkinWeights& b, double tol) {
 void check_same_weights(const SkinWeights& a, const SkinWeights& b, double tol) {
   CHECK(count_different(a, b, tol) == 0);
 }
+// The procedural humanoid jittered by up to 2 mm: its rings sit exactly on
+// the joints, where two bones tie for nearest and float noise picks the
+// winner (in any frame, scaled, moved or turned); a scanned or sculpted mesh
+// has no such ties. Copies of a point along seams move together (the mesh
+// stays closed).
+Character jittered_humanoid(std::uint32_t seed, std::uint32_t jitter_seed) {
+  Character c = posefix::humanoid(seed);
+  std::mt19937 rng(jitter_seed);
+  std::uniform_real_distribution<float> J(-2e-3f, 2e-3f);
+  std::map<std::array<float, 3>, std::array<float, 3>> moved;
+  for (std::size_t i = 0; i + 2 < c.mesh.positions.size(); i += 3) {
+    float* x = &c.mesh.positions[i];
+    const auto [it, fresh] = moved.try_emplace({x[0], x[1], x[2]}, std::array<float, 3>{});
+    if (fresh) it->second = {x[0] + J(rng), x[1] + J(rng), x[2] + J(rng)};
+    for (int d = 0; d < 3; ++d) x[d] = it->second[std::size_t(d)];
+  }
+  return c;
+}
 }  // namespace
 
 TEST_CASE("skinweights-any and bone heat give the same weights in centimetres and moved", "[skin_any]") {
-  // Jittered by up to 2 mm: the procedural rings sit exactly on the joints,
-  // where two bones tie for nearest and float noise picks the winner (in
-  // any frame, scaled or not); a scanned or sculpted mesh has no such ties.
-  // Copies of a point along seams move together (the mesh stays closed).
-  Character metres = posefix::humanoid(7);
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<float> J(-2e-3f, 2e-3f);
-  std::map<std::array<float, 3>, std::array<float, 3>> moved;
-  for (std::size_t i = 0; i + 2 < metres.mesh.positions.size(); i += 3) {
-    float* x = &metres.mesh.positions[i];
-    const auto [it, fresh] = moved.try_emplace({x[0], x[1], x[2]}, std::array<float, 3>{});
-    if (fresh) it->second = {x[0] + J(rng), x[1] + J(rng), x[2] + J(rng)};
-    for (int c = 0; c < 3; ++c) x[c] = it->second[std::size_t(c)];
-  }
+  const Character metres = jittered_humanoid(7, 11);
   // 13 m away: a float keeps 1e-4 cm there, far below the mesh's detail
   // (a character kilometres from the origin loses its shape in the file).
   const Character cm = posefix::moved_and_scaled(metres, 100.f, {250.f, -40.f, 1300.f});
@@ -305,18 +310,9 @@ TEST_CASE("skinweights-any that ignores the world columns gives a turned charact
   // Turned a quarter about the vertical axis (exactly: the matrix holds 0 and
   // +-1), every bone-relative column is unchanged -- distances, positions
   // along and off the bone, height above it, lengths, depth, bone heat --
-  // while the vertex's world position and normal are not. Jittered as above:
-  // no two bones tie for nearest.
-  Character c = posefix::humanoid(3);
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> J(-2e-3f, 2e-3f);
-  std::map<std::array<float, 3>, std::array<float, 3>> moved;
-  for (std::size_t i = 0; i + 2 < c.mesh.positions.size(); i += 3) {
-    float* x = &c.mesh.positions[i];
-    const auto [it, fresh] = moved.try_emplace({x[0], x[1], x[2]}, std::array<float, 3>{});
-    if (fresh) it->second = {x[0] + J(rng), x[1] + J(rng), x[2] + J(rng)};
-    for (int d = 0; d < 3; ++d) x[d] = it->second[std::size_t(d)];
-  }
+  // while the vertex's world position and normal are not. Jittered, so no
+  // two bones tie for nearest.
+  const Character c = jittered_humanoid(3, 5);
   Mat4 turn = mat4_identity();
   turn[0] = turn[10] = 0.0f;
   turn[2] = -1.0f;  // x -> -z
