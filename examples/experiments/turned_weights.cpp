@@ -22,6 +22,7 @@
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/eval/metrics.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 
@@ -51,11 +52,12 @@ Character turned(const Character& c, int quarters) {
   return out;
 }
 
+// Dense [n, joints] weights over the character's own joints (super_weights
+// with the identity joint map).
 std::vector<float> dense(const SkinWeights& w, std::int32_t joints) {
-  std::vector<float> d(static_cast<std::size_t>(w.num_vertices() * joints), 0.0f);
-  for (std::int64_t v = 0; v < w.num_vertices(); ++v)
-    for (std::int64_t e = w.ptr[v]; e < w.ptr[v + 1]; ++e) d[std::size_t(v * joints + w.joint[e])] += w.weight[e];
-  return d;
+  std::vector<std::int32_t> identity(static_cast<std::size_t>(joints));
+  for (std::int32_t j = 0; j < joints; ++j) identity[std::size_t(j)] = j;
+  return super_weights(w, identity, joints);
 }
 
 double dominant_accuracy(const std::vector<float>& pred, const std::vector<float>& truth, std::int64_t n,

@@ -54,7 +54,7 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
   std::vector<std::pair<float, std::int32_t>> order(static_cast<std::size_t>(nj));
   for (std::int64_t v = 0; v < n; ++v) {
     float* row = out.features.data() + v * dim;
-    for (int c = 0; c < 6; ++c) row[c] = base.at(v, c);
+    for (int c = 0; c < kVertexColumns; ++c) row[c] = base.at(v, c);
     const float x[3] = {rest[3 * v], rest[3 * v + 1], rest[3 * v + 2]};
     for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e) heat_row[heat.joint[e]] = heat.weight[e];
     for (std::int32_t j = 0; j < nj; ++j) {
@@ -95,7 +95,7 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
       const std::int32_t j = order[c].second;
       out.joint[static_cast<std::size_t>(v * k + c)] = j;
       const Near& e = near[j];
-      float* f = row + 6 + c * kPairFeatures;
+      float* f = row + kVertexColumns + c * kPairFeatures;
       f[0] = e.d;
       f[1] = e.d - d0;
       f[2] = e.along;
@@ -120,7 +120,7 @@ Tensor bone_heat_log_prior(const BoneCandidates& c, float eps) {
   Tensor p = Tensor::zeros(n, c.k);
   for (std::int64_t v = 0; v < n; ++v)
     for (int i = 0; i < c.valid; ++i) {
-      const float h = c.features.at(v, 6 + std::int64_t(i) * kPairFeatures + kBoneHeatPairColumn);
+      const float h = c.features.at(v, kVertexColumns + std::int64_t(i) * kPairFeatures + kBoneHeatPairColumn);
       GATCORE_CHECK(std::isfinite(h) && h >= 0.0f, "bone_heat_log_prior: bone heat weight ", h, " at vertex ", v);
       p.at(v, i) = std::log(h + eps);
     }
