@@ -127,6 +127,16 @@ int main(void) {
       EXPECT(pw[2 * v] >= pw[2 * v + 1]);
       EXPECT(pj[2 * v] >= 0 && pj[2 * v] < J);
     }
+    /* Mixed with bone heat: still k normalised influences; a share outside
+     * [0, 1] is refused. */
+    EXPECT(gatcore_weight_predictor_set_heat_blend(p, 1.5f) == GATCORE_ERROR_INVALID_ARGUMENT);
+    EXPECT(gatcore_weight_predictor_set_heat_blend(NULL, 0.5f) == GATCORE_ERROR_INVALID_ARGUMENT);
+    EXPECT(gatcore_weight_predictor_set_heat_blend(p, 0.5f) == GATCORE_OK);
+    EXPECT(gatcore_weight_predictor_predict(p, &mesh, &sk, 2, pj, pw) == GATCORE_OK);
+    for (int v = 0; v < NV; ++v) {
+      EXPECT(fabsf(pw[2 * v] + pw[2 * v + 1] - 1.0f) < 1e-5f);
+      EXPECT(pj[2 * v] >= 0 && pj[2 * v] < J);
+    }
     gatcore_weight_predictor_destroy(p);
   }
   if (failures) fprintf(stderr, "%d failure(s)\n", failures);

@@ -8,6 +8,7 @@
 
 #include "character_fixtures.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/character/rig/limit_weights.hpp"
 #include "gatcore/error.hpp"
 
@@ -153,6 +154,41 @@ TEST_CASE("limit_weights keeps the largest influences above min_weight, renormal
   CHECK(dense[4] == 0.0f);
   CHECK_THROWS_AS(limit_weights(w, 0, 0.0f), gatcore::InvalidArgument);
   CHECK_THROWS_AS(limit_weights(w, 4, 1.0f), gatcore::InvalidArgument);
+}
+
+TEST_CASE("blend_weights mixes two weight sets per vertex, keeps the largest, renormalised", "[blend_weights]") {
+  SkinWeights a, b;
+  a.ptr = {0, 2, 3};
+  a.joint = {0, 1, 2};
+  a.weight = {0.6f, 0.4f, 1.0f};
+  b.ptr = {0, 2, 4};
+  b.joint = {1, 3, 0, 2};
+  b.weight = {0.5f, 0.5f, 0.8f, 0.2f};
+  // Vertex 0 at share 0.25: joint 0 0.45, joint 1 0.3 + 0.125, joint 3 0.125;
+  // the top 2 renormalised by 0.875. Vertex 1: joint 0 0.2, joint 2 0.8.
+  const SkinWeights m = blend_weights(a, b, 0.25f, 2);
+  REQUIRE(m.ptr == std::vector<std::int64_t>{0, 2, 4});
+  REQUIRE(m.joint == std::vector<std::int32_t>{0, 1, 0, 2});
+  CHECK(m.weight[0] == Approx(0.45 / 0.875));
+  CHECK(m.weight[1] == Approx(0.425 / 0.875));
+  CHECK(m.weight[2] == Approx(0.2));
+  CHECK(m.weight[3] == Approx(0.8));
+  // The ends are the inputs themselves (a joint at weight 0 is not kept).
+  const SkinWeights only_a = blend_weights(a, b, 0.0f, 4), only_b = blend_weights(a, b, 1.0f, 4);
+  CHECK(only_a.ptr == a.ptr);
+  CHECK(only_a.joint == a.joint);
+  CHECK(only_b.ptr == b.ptr);
+  CHECK(only_b.joint == std::vector<std::int32_t>{1, 3, 0, 2});
+  for (std::size_t k = 0; k < a.weight.size(); ++k) CHECK(only_a.weight[k] == Approx(a.weight[k]));
+  for (std::size_t k = 0; k < b.weight.size(); ++k) CHECK(only_b.weight[k] == Approx(b.weight[k]));
+  SkinWeights short_b = b;
+  short_b.ptr.pop_back();
+  short_b.joint.resize(2);
+  short_b.weight.resize(2);
+  CHECK_THROWS_WITH(blend_weights(a, short_b, 0.5f, 4), Catch::Contains("2 and 1 vertices"));
+  CHECK_THROWS_AS(blend_weights(a, b, 1.5f, 4), gatcore::InvalidArgument);
+  CHECK_THROWS_AS(blend_weights(a, b, std::nanf(""), 4), gatcore::InvalidArgument);
+  CHECK_THROWS_AS(blend_weights(a, b, 0.5f, 0), gatcore::InvalidArgument);
 }
 
 namespace {

@@ -21,6 +21,9 @@
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
+#include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/features/bone_candidates.hpp"
+#include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/gatcore.h"
 #include "gatcore/runtime.hpp"
@@ -462,6 +465,38 @@ TEST_CASE("runtime::Deformer reports bad input as errors naming it", "[runtime]"
   CHECK(w.joint == ref.weights.joint);
   CHECK(w.weight == ref.weights.weight);
   CHECK_THROWS_WITH(runtime::WeightPredictor::load(path), Contains("densegats"));
+
+  // A skinweights-any checkpoint: no bone names, predict_skin_weights_any's
+  // weights on a skeleton whose joints are renamed; set_heat_blend mixes in
+  // bone heat's exactly as blend_weights does.
+  const int k = 8;
+  models::ModelConfig ac = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+  ac.stage1 = {16, 8}, ac.gc_dims = {8, 8, 8}, ac.global_mlp = {16}, ac.classifier = {16};
+  auto am = models::make_model(ac, 3);
+  const std::string apath = tmp("any.gcm");
+  models::save_checkpoint(apath, *am, models::Normaliser{}, nullptr, {{"features", "bone_candidates"}});
+  runtime::WeightPredictor ap = runtime::WeightPredictor::load(apath);
+  CHECK(ap.bones().empty());
+  Character renamed = ch;
+  for (auto& n : renamed.skeleton.names) n = "xx_" + n;
+  const SkinWeights aw = ap.predict(renamed.mesh, renamed.skeleton, 4);
+  models::LoadedModel al = models::load_checkpoint(apath);
+  al.model->fold_batch_norm();
+  const SkinWeights aref = predict_skin_weights_any(*al.model, al.norm, ch, 4).weights;
+  CHECK(aw.ptr == aref.ptr);
+  CHECK(aw.joint == aref.joint);
+  CHECK(aw.weight == aref.weight);
+  runtime::BindOptions with_alias;
+  with_alias.aliases.pairs.push_back({"xx_Hips", "Hips"});
+  CHECK_THROWS_WITH(ap.predict(renamed.mesh, renamed.skeleton, 4, with_alias), Contains("no effect"));
+  CHECK_THROWS_WITH(ap.set_heat_blend(1.5f), Contains("[0, 1]"));
+  ap.set_heat_blend(0.4f);
+  const SkinWeights mixed = ap.predict(renamed.mesh, renamed.skeleton, 4);
+  const SkinWeights mref = blend_weights(aref, bone_heat_weights(ch), 0.4f, 4);
+  CHECK(mixed.ptr == mref.ptr);
+  CHECK(mixed.joint == mref.joint);
+  CHECK(mixed.weight == mref.weight);
+  CHECK(mixed.joint != aref.joint);  // the mix is not the model alone
 }
 
 TEST_CASE("the C API gives the C++ runtime's numbers and its errors as codes", "[runtime][c_api]") {

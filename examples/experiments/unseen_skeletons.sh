@@ -6,7 +6,7 @@
 #
 #   examples/experiments/unseen_skeletons.sh [--folds "women creatures khronos"] [--minutes M]
 #       [--sampling consecutive|random|full] [--pair-scorer W,...] [--world-columns ignore|use]
-#       [--precision fp32|bf16] [--seed S]
+#       [--precision fp32|bf16] [--seed S] [--heat-blend S]
 #       [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
@@ -38,6 +38,9 @@
 # --pair-scorer). --world-columns use lets skinweights-any read the vertex's
 # world-frame position and normal (gat train --world-columns; the default,
 # ignore, gives it only quantities measured from the character's own bones).
+# --heat-blend S also evaluates the same checkpoint with its weights mixed
+# with bone heat's, (1 - S) * model + S * bone heat per vertex (gat eval
+# --heat-blend), as the method skinweights-any+heat in the tables.
 # --precision bf16 trains both models with bf16 products
 # (gat train --precision; fp32 where the CPU lacks AVX512_BF16, as gat train
 # says). The super-skeleton models
@@ -53,6 +56,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= world_columns= precision=fp32
+heat_blend=
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/examples/gat"
@@ -67,10 +71,11 @@ while [ $# -gt 0 ]; do
     --pair-scorer) pair_scorer="${2:?--pair-scorer needs widths}"; shift 2 ;;
     --world-columns) world_columns="${2:?--world-columns needs ignore or use}"; shift 2 ;;
     --precision) precision="${2:?--precision needs fp32 or bf16}"; shift 2 ;;
+    --heat-blend) heat_blend="${2:?--heat-blend needs a share in (0, 1]}"; shift 2 ;;
     --out) out="${2:?--out needs a directory}"; shift 2 ;;
     --data) data="${2:?--data needs a directory}"; shift 2 ;;
     --gat) gat="${2:?--gat needs a path}"; shift 2 ;;
-    -h|--help) sed -n '2,46p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,50p' "$0"; exit 0 ;;
     *) die "unknown option $1" ;;
   esac
 done
@@ -145,6 +150,12 @@ for fold in $folds; do
   "$gat" eval --model "$dir/skinweights-any.best.gcm" --poses "$poses" --seed "$seed" --json "$dir/skinweights-any.json" \
     >"$dir/skinweights-any.log" 2>&1 || { cat "$dir/skinweights-any.log" >&2; die "eval on $fold failed"; }
   log "$fold: skinweights-any $(grep -c '^epoch' "$dir/skinweights-any.train.log") epochs"
+  if [ -n "$heat_blend" ]; then
+    "$gat" eval --model "$dir/skinweights-any.best.gcm" --heat-blend "$heat_blend" --poses "$poses" --seed "$seed" \
+      --json "$dir/skinweights-any+heat.json" >"$dir/skinweights-any+heat.log" 2>&1 \
+      || { cat "$dir/skinweights-any+heat.log" >&2; die "eval with --heat-blend on $fold failed"; }
+    log "$fold: skinweights-any mixed with bone heat at $heat_blend evaluated"
+  fi
   if [ "$fold" = humanoids ]; then  # the paper's model, on the skeleton it was trained on
     "$gat" train --model neuroskinning --data "$dir/dataset.json" --seed "$seed" --epochs 100000 --minutes "$minutes" \
       --val-every 1 --batch 4 --sample-vertices 512 --sampling random --precision "$precision" --out "$dir/neuroskinning.gcm" \
@@ -163,7 +174,7 @@ out, folds = sys.argv[1], sys.argv[2:]
 print("| fold | character | method | precision | recall | L1 mean | L1 max | dominant bone | deform. mean / h | deform. max / h |")
 print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
 for fold in folds:
-    for m in ("bone-heat", "skinweights-any", "neuroskinning"):
+    for m in ("bone-heat", "skinweights-any", "skinweights-any+heat", "neuroskinning"):
         p = os.path.join(out, fold, m + ".json")
         if not os.path.exists(p):
             continue
@@ -171,26 +182,30 @@ for fold in folds:
         for c in j["characters"] + [dict(j["overall"], name="**overall**")]:
             print(f"| {fold} | {c['name']} | {m} | {c['precision']:.3f} | {c['recall']:.3f} | {c['l1_mean']:.4f} | "
                   f"{c['l1_max']:.4f} | {c['dominant']:.3f} | {c['deform_mean']:.5f} | {c['deform_max']:.4f} |")
-# Issue #15's bar per test character: skinweights-any's L1 below bone heat's,
-# its dominant bone at least 85 %.
-print()
-print("| fold | character | bone heat L1 / dominant | skinweights-any L1 / dominant | L1 below bone heat | dominant >= 0.85 |")
-print("|---|---|---:|---:|---|---|")
-below = high = total = 0
-for fold in folds:
-    paths = [os.path.join(out, fold, m + ".json") for m in ("bone-heat", "skinweights-any")]
-    if not all(os.path.exists(p) for p in paths):
-        continue
-    heat, model = ({c["name"]: c for c in json.load(open(p))["characters"]} for p in paths)
-    for name, c in model.items():
-        if name not in heat:
+# Issue #15's bar per test character: the model's L1 below bone heat's, its
+# dominant bone at least 85 % (for skinweights-any, and with --heat-blend for
+# the mix too).
+for m in ("skinweights-any", "skinweights-any+heat"):
+    rows, below, high, total = [], 0, 0, 0
+    for fold in folds:
+        paths = [os.path.join(out, fold, x + ".json") for x in ("bone-heat", m)]
+        if not all(os.path.exists(p) for p in paths):
             continue
-        h = heat[name]
-        lower, enough = c["l1_mean"] < h["l1_mean"], c["dominant"] >= 0.85
-        below, high, total = below + lower, high + enough, total + 1
-        print(f"| {fold} | {name} | {h['l1_mean']:.4f} / {h['dominant']:.3f} | {c['l1_mean']:.4f} / {c['dominant']:.3f} | "
-              f"{'yes' if lower else '**no**'} | {'yes' if enough else '**no**'} |")
-if total:
-    print(f"\nskinweights-any: L1 below bone heat on {below} of {total} test characters, dominant bone >= 85 % on {high} of {total}.")
+        heat, model = ({c["name"]: c for c in json.load(open(p))["characters"]} for p in paths)
+        for name, c in model.items():
+            if name not in heat:
+                continue
+            h = heat[name]
+            lower, enough = c["l1_mean"] < h["l1_mean"], c["dominant"] >= 0.85
+            below, high, total = below + lower, high + enough, total + 1
+            rows.append(f"| {fold} | {name} | {h['l1_mean']:.4f} / {h['dominant']:.3f} | {c['l1_mean']:.4f} / "
+                        f"{c['dominant']:.3f} | {'yes' if lower else '**no**'} | {'yes' if enough else '**no**'} |")
+    if not total:
+        continue
+    print()
+    print(f"| fold | character | bone heat L1 / dominant | {m} L1 / dominant | L1 below bone heat | dominant >= 0.85 |")
+    print("|---|---|---:|---:|---|---|")
+    print("\n".join(rows))
+    print(f"\n{m}: L1 below bone heat on {below} of {total} test characters, dominant bone >= 85 % on {high} of {total}.")
 PY
 log "report: $out/report.md"

@@ -35,6 +35,7 @@ struct EvalArgs {
   std::string data, part = "test", json_path, errormap_dir, baseline;
   long samples = 16, seed = 12345, poses = 16, size = 320;
   double min_weight = 0;
+  double heat_blend = 0;
   long confusions = 0;
   gat::EvalMotionArgs motion;
   gat::CommonOptions common;
@@ -66,6 +67,10 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
                "skin weights: drop predicted influences below W of the vertex's total (renormalised) before the "
                "metrics (default 0; bone heat: 0.01)")
       ->check(number_in(0, 0.999999));
+  c.add_option("--heat-blend", a->heat_blend,
+               "skinweights-any: mix the model's weights with bone heat's, (1 - S) * model + S * bone heat per vertex, "
+               "top k kept (as gat predict-weights --heat-blend; default 0: the model alone)")
+      ->check(number_in(0, 1));
   c.add_option("--confusions", a->confusions,
                "skin weights: after the table, each character's N largest dominant-bone confusions (artist's joint -> "
                "predicted joint: vertices), also in the JSON; shows which boundaries a method places differently")
@@ -128,7 +133,7 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
     for (const char* o : {"--stride", "--markdown", "--errormap-frames", "--errormap-size", "--loss-curve",
                           "--cm-per-unit", "--linear-probe", "--max-limit-excess"})
       GATCORE_CHECK(motion || !c.count(o), o, " applies only with --motion or --targets");
-    for (const char* o : {"--baseline", "--min-weight"})
+    for (const char* o : {"--baseline", "--min-weight", "--heat-blend"})
       GATCORE_CHECK(!motion || !c.count(o), o, " does not apply with --motion");
     apply_threads(a->common);
     if (motion) {
@@ -139,6 +144,7 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
     }
     if (!a->baseline.empty()) {
       GATCORE_CHECK(a->models.empty(), "--baseline evaluates a classical method; drop --model");
+      GATCORE_CHECK(!c.count("--heat-blend"), "--heat-blend mixes a model's weights with bone heat's; it needs --model");
       GATCORE_CHECK(!a->data.empty(), "--baseline needs --data DATASET");
       return eval_weight_baseline(a->baseline, a->data, a->part, a->poses, a->seed,
                                   c.count("--min-weight") ? a->min_weight : -1.0, a->json_path, a->common.quiet,
@@ -164,8 +170,11 @@ int run_eval(const EvalArgs& a) {
     // Each character's own joints (no super skeleton): the baselines' protocol.
     if (data.empty() && l.file.metadata.count("data_path")) data = l.file.metadata.at("data_path");
     return gat::eval_weight_baseline("skinweights-any", data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
-                                      json_path, a.common.quiet, int(a.confusions), &l);
+                                      json_path, a.common.quiet, int(a.confusions), &l, float(a.heat_blend));
   }
+  GATCORE_CHECK(a.heat_blend == 0, "--heat-blend: ", path, " is a ", l.model->config().name,
+                " checkpoint; gat eval mixes bone heat only into skinweights-any's weights (each character's own "
+                "joints; gat predict-weights --heat-blend works with every skin-weight model)");
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
   const auto& md = l.file.metadata;

@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/io/gltf.hpp"
+#include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/character/rig/limit_weights.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
 #include "progress.hpp"
@@ -31,6 +32,7 @@ struct PredictArgs {
   std::string out, method = "model";
   long k = 4;
   double min_weight = -1;  // < 0: the method's default
+  double heat_blend = 0;   // a model's weights mixed with bone heat's at this share
   std::vector<std::string> aliases;
   std::vector<std::string> bones, controls;  // bone heat: joints forced to be bones / controls
   CommonOptions common;
@@ -48,6 +50,45 @@ void print_weightless_joints(const Character& ch, const SkinWeights& w, const ch
   if (count > 0)
     std::printf("  %d of %d joints get no weight (%s): %s%s\n", count, ch.skeleton.num_joints(), why, names.c_str(),
                 count > 8 ? ", ..." : "");
+}
+
+// Bone heat's settings for CHARACTER: top k, the users' --bone / --control
+// joints (checked by name), min weight 0.01 unless given.
+BoneHeatParams heat_params(const PredictArgs& a, const Character& ch, const std::string& in) {
+  BoneHeatParams bp;
+  const auto mark = [&](const std::vector<std::string>& names, std::int8_t value, const char* flag) {
+    for (const std::string& name : names) {
+      const std::int32_t j = ch.skeleton.find(name);
+      GATCORE_CHECK(j >= 0, in, ": ", flag, " ", name, ": the character has no joint of that name");
+      GATCORE_CHECK(bp.joint_override[static_cast<std::size_t>(j)] == 0, in, ": joint ", name,
+                    " is given both --bone and --control");
+      bp.joint_override[static_cast<std::size_t>(j)] = value;
+    }
+  };
+  if (!a.bones.empty() || !a.controls.empty()) {
+    bp.joint_override.assign(static_cast<std::size_t>(ch.skeleton.num_joints()), 0);
+    mark(a.bones, 1, "--bone");
+    mark(a.controls, -1, "--control");
+  }
+  bp.max_influences = int(a.k);
+  bp.min_weight = a.min_weight < 0 ? 0.01f : float(a.min_weight);
+  return bp;
+}
+
+// --heat-blend S: the model's weights mixed with bone heat's on the same
+// (welded) character; --min-weight applies after.
+void apply_heat_blend(const PredictArgs& a, const Character& ch, const std::string& in, SkinWeights& w) {
+  if (a.heat_blend <= 0) return;
+  BoneHeatParams bp = heat_params(a, ch, in);
+  bp.min_weight = 0.01f;  // bone heat's own pruning; --min-weight applies to the mix
+  Activity doing("computing the bone-heat weights of " + in + " for --heat-blend");
+  w = blend_weights(w, bone_heat_weights(ch, bp), float(a.heat_blend), int(a.k));
+}
+
+void print_heat_blend(const PredictArgs& a) {
+  if (a.heat_blend > 0)
+    std::printf("  mixed with bone heat: (1 - %g) * model + %g * bone heat per vertex, top %ld kept\n", a.heat_blend,
+                a.heat_blend, a.k);
 }
 
 int run(const PredictArgs& a) {
@@ -77,24 +118,10 @@ int run(const PredictArgs& a) {
   if (heat) {
     GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with --method bone-heat (no model bones to match)");
     stage("reading the character");
+    GATCORE_CHECK(a.heat_blend == 0, "--heat-blend mixes a model's weights with bone heat's; with --method "
+                                     "bone-heat there is no model");
     const Character ch = load_gltf(in);
-    BoneHeatParams bp;
-    const auto mark = [&](const std::vector<std::string>& names, std::int8_t value, const char* flag) {
-      for (const std::string& name : names) {
-        const std::int32_t j = ch.skeleton.find(name);
-        GATCORE_CHECK(j >= 0, in, ": ", flag, " ", name, ": the character has no joint of that name");
-        GATCORE_CHECK(bp.joint_override[static_cast<std::size_t>(j)] == 0, in, ": joint ", name,
-                      " is given both --bone and --control");
-        bp.joint_override[static_cast<std::size_t>(j)] = value;
-      }
-    };
-    if (!a.bones.empty() || !a.controls.empty()) {
-      bp.joint_override.assign(static_cast<std::size_t>(ch.skeleton.num_joints()), 0);
-      mark(a.bones, 1, "--bone");
-      mark(a.controls, -1, "--control");
-    }
-    bp.max_influences = int(k);
-    bp.min_weight = min_weight < 0 ? 0.01f : float(min_weight);
+    const BoneHeatParams bp = heat_params(a, ch, in);
     Activity doing("computing the bone-heat weights of " + in);
     stage("bone heat: visibility and heat diffusion");
     const auto t0 = std::chrono::steady_clock::now();
@@ -112,8 +139,9 @@ int run(const PredictArgs& a) {
     print_weightless_joints(ch, w, "controls outside the mesh, or no vertex's nearest bone");
     return 0;
   }
-  GATCORE_CHECK(a.bones.empty() && a.controls.empty(),
-                "--bone and --control only apply to --method bone-heat (a model scores every joint itself)");
+  GATCORE_CHECK(a.heat_blend > 0 || (a.bones.empty() && a.controls.empty()),
+                "--bone and --control only apply to bone heat (--method bone-heat, or a model's --heat-blend); a model "
+                "scores every joint itself");
   const Device dev = device_from_flag(a.common.device, "predict-weights");
   Activity reading("reading the checkpoint " + model_path);
   stage("reading the checkpoint");
@@ -127,6 +155,7 @@ int run(const PredictArgs& a) {
     lm.model->fold_batch_norm();
     stage("features and inference");
     WeightPrediction p = predict_skin_weights_any(*lm.model, lm.norm, ch, int(k));
+    apply_heat_blend(a, ch, in, p.weights);
     if (min_weight > 0) p.weights = limit_weights(p.weights, int(k), float(min_weight));
     stage("writing");
     save_gltf_with_weights(in, ch, p.weights, out, int(k));
@@ -136,6 +165,7 @@ int run(const PredictArgs& a) {
                 device_label(dev).c_str());
     std::printf("  %lld vertices welded (%lld in the file), %d joints\n", static_cast<long long>(ch.mesh.num_vertices()),
                 static_cast<long long>(ch.num_file_vertices()), ch.skeleton.num_joints());
+    print_heat_blend(a);
     std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld)\n",
                 double(p.weights.joint.size()) / double(std::max<std::int64_t>(1, p.weights.num_vertices())),
                 static_cast<long long>(p.weights.max_influences()), k);
@@ -152,6 +182,7 @@ int run(const PredictArgs& a) {
   Activity doing("predicting the skin weights of " + in);
   stage("features and inference");
   WeightPrediction p = predict_skin_weights(*lm.model, lm.norm, bones, ch, int(k), aliases);
+  apply_heat_blend(a, ch, in, p.weights);
   if (min_weight > 0) p.weights = limit_weights(p.weights, int(k), float(min_weight));
   stage("writing");
   save_gltf_with_weights(in, ch, p.weights, out, int(k));
@@ -168,7 +199,9 @@ int run(const PredictArgs& a) {
     std::printf(", %zu without a bone get no weight (%s%s)", p.mapping.unmapped.size(), names.c_str(),
                 p.mapping.unmapped.size() > 8 ? ", ..." : "");
   }
-  std::printf("\n  influences per vertex: mean %.2f, max %lld (limit %ld)\n",
+  std::printf("\n");
+  print_heat_blend(a);
+  std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld)\n",
               double(p.weights.joint.size()) / double(std::max<std::int64_t>(1, p.weights.num_vertices())),
               static_cast<long long>(p.weights.max_influences()), k);
   std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
@@ -199,6 +232,12 @@ Runner setup_predict_weights(CLI::App& gat) {
                "drop influences below W of the vertex's total, renormalise (default 0 for a model, 0.01 for bone "
                "heat; artists often use about 2 influences)")
       ->check(number_in(0, 0.999));
+  c.add_option("--heat-blend", a->heat_blend,
+               "S in [0, 1]: mix the model's weights with bone heat's, (1 - S) * model + S * bone heat per vertex, "
+               "then keep the largest --max-influences (default 0: the model alone). A hedge for a character unlike "
+               "every family the model was trained on: 0.3 lowered L1 on the unseen creatures and Khronos rigs "
+               "and cost on characters like the training ones (docs/RESULTS.md, issue #15)")
+      ->check(number_in(0, 1));
   add_out(c, a->out, "the character with the predicted weights (.glb / .gltf; required)");
   c.add_option("--max-influences", a->k,
                "bones kept per vertex, renormalised (4: what engines expect; more are written as "
@@ -206,10 +245,11 @@ Runner setup_predict_weights(CLI::App& gat) {
       ->check(int_in(1, 64))->capture_default_str();
   add_repeatable(c, "--alias", a->aliases, "JOINT=BONE: treat the character's joint JOINT as the model's bone BONE");
   add_repeatable(c, "--bone", a->bones,
-                 "JOINT: with --method bone-heat, JOINT is a bone even where it looks like a control (a joint "
-                 "outside the mesh)");
+                 "JOINT: with --method bone-heat (or --heat-blend), JOINT is a bone even where it looks like a "
+                 "control (a joint outside the mesh)");
   add_repeatable(c, "--control", a->controls,
-                 "JOINT: with --method bone-heat, JOINT gets no weight (an IK target, a helper the rules keep)");
+                 "JOINT: with --method bone-heat (or --heat-blend), bone heat gives JOINT no weight (an IK target, "
+                 "a helper the rules keep)");
   add_device(c, a->common);
   add_threads(c, a->common);
   add_quiet(c, a->common);

@@ -19,8 +19,11 @@ namespace gat {
 void print_weight_table(const std::vector<gatcore::character::CharacterWeightEval>& per,
                         const gatcore::character::WeightEvalOptions& eo, const std::string& method,
                         const std::string& json_path, int confusions = 0);
-// model: null for a baseline (method "bone-heat"), else a skinweights-any checkpoint.
+// model: null for a baseline (method "bone-heat"), else a skinweights-any
+// checkpoint, whose weights heat_blend > 0 mixes with bone heat's
+// (rig/blend_weights.hpp; the method is then reported as
+// "skinweights-any+heatS").
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
                          long seed, double min_weight, const std::string& json_path, bool quiet, int confusions = 0,
-                         gatcore::models::LoadedModel* model = nullptr);
+                         gatcore::models::LoadedModel* model = nullptr, float heat_blend = 0.0f);
 }

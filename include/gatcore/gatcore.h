@@ -37,7 +37,8 @@
 extern "C" {
 #endif
 
-#define GATCORE_C_API_VERSION 3 /* 2: gatcore_precision, gatcore_deformer_load_precision; 3: gatcore_deformer_absent_bones */
+#define GATCORE_C_API_VERSION 4 /* 2: gatcore_precision, gatcore_deformer_load_precision; 3: gatcore_deformer_absent_bones;
+                                   4: skinweights-any checkpoints, gatcore_weight_predictor_set_heat_blend */
 
 typedef enum gatcore_status {
   GATCORE_OK = 0,
@@ -143,7 +144,8 @@ gatcore_status gatcore_deformer_absent_bones(const gatcore_deformer* d, int32_t*
 gatcore_status gatcore_deformer_last_timing(const gatcore_deformer* d, double* features_ms, double* model_ms,
                                             double* total_ms);
 
-/* ---- Skin-weight prediction (neuroskinning, pointnet, fc checkpoints) ---- */
+/* ---- Skin-weight prediction (neuroskinning, pointnet, fc checkpoints, matched
+ * by joint name; skinweights-any checkpoints, any skeleton) ---- */
 typedef struct gatcore_weight_predictor gatcore_weight_predictor;
 
 gatcore_status gatcore_weight_predictor_load(const char* checkpoint, gatcore_device device,
@@ -155,6 +157,10 @@ void gatcore_weight_predictor_destroy(gatcore_weight_predictor* p);
 gatcore_status gatcore_weight_predictor_predict(gatcore_weight_predictor* p, const gatcore_mesh* mesh,
                                                 const gatcore_skeleton* skeleton, int32_t k, int32_t* out_joints,
                                                 float* out_weights);
+/* Later predictions mix the model's weights with bone heat's: (1 - share) *
+ * model + share * bone heat per vertex, the largest k kept (0, the default:
+ * the model alone; as gat predict-weights --heat-blend). share in [0, 1]. */
+gatcore_status gatcore_weight_predictor_set_heat_blend(gatcore_weight_predictor* p, float share);
 
 #ifdef __cplusplus
 }

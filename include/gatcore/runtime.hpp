@@ -25,8 +25,10 @@
 // matrices and the skeleton's inverse bind matrices.
 //
 // WeightPredictor: a skin-weight checkpoint (neuroskinning, ..., fc,
-// pointnet) predicting a new character's skin weights (a one-off per
-// character, not per frame: it allocates).
+// pointnet, matched to the skeleton by joint name; or skinweights-any, any
+// skeleton, no names) predicting a new character's skin weights (a one-off
+// per character, not per frame: it allocates), optionally mixed with bone
+// heat's (set_heat_blend, as gat predict-weights --heat-blend).
 //
 // Errors: gatcore::Error (InvalidArgument for bad input) with a message
 // naming the argument / file / value. No dependency on datasets, importers
@@ -131,6 +133,14 @@ class WeightPredictor {
   // Not thread-safe on one predictor (the model runs in place); use one per thread.
   character::SkinWeights predict(const character::Mesh& rest, const character::Skeleton& skeleton,
                                  int max_influences = 4, const BindOptions& opt = {});
+  // Later predictions mix the model's weights with bone heat's:
+  // (1 - share) * model + share * bone heat per vertex, the largest
+  // max_influences kept (0, the default: the model alone). A hedge for a
+  // character unlike every family the model was trained on
+  // (docs/RESULTS.md, issue #15). Throws unless share is in [0, 1].
+  void set_heat_blend(float share);
+  // The bone names a name-matched model was trained on; empty for
+  // skinweights-any (it takes any skeleton).
   const std::vector<std::string>& bones() const;
 
  private:

@@ -341,4 +341,10 @@ gatcore_status gatcore_weight_predictor_predict(gatcore_weight_predictor* p, con
   });
 }
 
+gatcore_status gatcore_weight_predictor_set_heat_blend(gatcore_weight_predictor* p, float share) {
+  GATCORE_C_REQUIRE(p, "gatcore_weight_predictor_set_heat_blend: p must not be NULL");
+  return guarded("gatcore_weight_predictor_set_heat_blend", GATCORE_ERROR_INVALID_ARGUMENT,
+                 [&] { p->p.set_heat_blend(share); });
+}
+
 }  // extern "C"

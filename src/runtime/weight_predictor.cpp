@@ -1,8 +1,13 @@
 // runtime::WeightPredictor: a skin-weight checkpoint applied to a new
-// character (predict_skin_weights, as gat predict-weights), behind the
-// runtime's load / predict interface.
+// character (predict_skin_weights / predict_skin_weights_any, then
+// --heat-blend's mix, as gat predict-weights), behind the runtime's load /
+// predict interface.
+#include <cmath>
+
+#include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
+#include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/runtime.hpp"
@@ -11,7 +16,9 @@ namespace gatcore::runtime {
 
 struct LoadedWeights {
   models::LoadedModel lm;
-  std::vector<std::string> bones;
+  std::vector<std::string> bones;  // empty for skinweights-any
+  bool any = false;                // skinweights-any: each vertex's own nearest bones
+  float heat_blend = 0.0f;
 };
 
 WeightPredictor::WeightPredictor(std::unique_ptr<LoadedWeights> m) : model_(std::move(m)) {}
@@ -23,13 +30,21 @@ WeightPredictor WeightPredictor::load(const std::string& path, DeviceChoice devi
   const Device dev = resolve_device(device);
   auto m = std::make_unique<LoadedWeights>();
   m->lm = models::load_checkpoint(path);
-  m->bones = character::character_model_bones(m->lm, path, models::Task::weights);
+  m->any = m->lm.model->config().name == "skinweights-any";
+  if (!m->any) m->bones = character::character_model_bones(m->lm, path, models::Task::weights);
   m->lm.model->to(dev);
   m->lm.model->fold_batch_norm();
   return WeightPredictor(std::move(m));
 }
 
 const std::vector<std::string>& WeightPredictor::bones() const { return model_->bones; }
+
+void WeightPredictor::set_heat_blend(float share) {
+  GATCORE_CHECK(model_, "WeightPredictor::set_heat_blend: no model loaded");
+  GATCORE_CHECK(std::isfinite(share) && share >= 0.0f && share <= 1.0f,
+                "WeightPredictor::set_heat_blend: share must be in [0, 1], got ", share);
+  model_->heat_blend = share;
+}
 
 character::SkinWeights WeightPredictor::predict(const character::Mesh& rest, const character::Skeleton& skeleton,
                                                 int max_influences, const BindOptions& opt) {
@@ -51,9 +66,19 @@ character::SkinWeights WeightPredictor::predict(const character::Mesh& rest, con
   ch.mesh.weights.weight.assign(std::size_t(n), 1.0f);
   ch.mesh.validate(skeleton.num_joints(), (opt.name + " mesh").c_str());
   GATCORE_CHECK(n > 0 && ch.mesh.num_triangles() > 0, opt.name, ": the mesh has no triangles");
-  return character::predict_skin_weights(*model_->lm.model, model_->lm.norm, model_->bones, ch, max_influences,
-                                         opt.aliases)
-      .weights;
+  GATCORE_CHECK(!model_->any || opt.aliases.pairs.empty(), opt.name,
+                ": aliases have no effect with skinweights-any (it matches no bone names)");
+  character::SkinWeights w =
+      model_->any ? character::predict_skin_weights_any(*model_->lm.model, model_->lm.norm, ch, max_influences).weights
+                  : character::predict_skin_weights(*model_->lm.model, model_->lm.norm, model_->bones, ch,
+                                                    max_influences, opt.aliases)
+                        .weights;
+  if (model_->heat_blend > 0.0f) {
+    character::BoneHeatParams bp;  // gat predict-weights --heat-blend's: min weight 0.01
+    bp.max_influences = max_influences;
+    w = character::blend_weights(w, character::bone_heat_weights(ch, bp), model_->heat_blend, max_influences);
+  }
+  return w;
 }
 
 }  // namespace gatcore::runtime
