@@ -117,9 +117,9 @@ int run(const PredictArgs& a) {
   const auto stage = [&](const char* what) { progress.update(step++, what); };
   if (heat) {
     GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with --method bone-heat (no model bones to match)");
-    stage("reading the character");
     GATCORE_CHECK(a.heat_blend == 0, "--heat-blend mixes a model's weights with bone heat's; with --method "
                                      "bone-heat there is no model");
+    stage("reading the character");
     const Character ch = load_gltf(in);
     const BoneHeatParams bp = heat_params(a, ch, in);
     Activity doing("computing the bone-heat weights of " + in);
