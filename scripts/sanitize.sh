@@ -40,10 +40,11 @@ if [[ "$mode" != "--fuzz-only" ]]; then
   # (Set-ups such as gat_train_character_models and gat_train_data_densegats,
   # which other tests need, must stay: ctest does
   # not add an excluded set-up back, and the tests that need it would fail;
-  # so gat_heat_blend, which needs gat_skinweights_any's trained model, goes
-  # with it: blend_weights and the runtime's mix run here in the unit tests.)
+  # so gat_heat_blend and gat_world_columns, which need gat_skinweights_any's
+  # trained model, go with it: blend_weights, the runtime's mix and the world
+  # columns' normaliser run here in the unit tests.)
   ctest --test-dir "$build" --output-on-failure -j2 \
-    -E '_(lp128|lp256|lp512|staging|smallbind.*)$|^downstream_find_package$|^experiment_|_experiment_tiny$|^dist_train_|^gat_demo|^gat_train_(data_neuroskinning|eval_.*|loss|interrupt|vulkan)$|^gat_(skinweights_any|heat_blend)$|^gat_blender_import$|^runtime_deform_clip$|^gat_distill$|^gat_joint_columns_nearest$|^gat_progress_tty$'
+    -E '_(lp128|lp256|lp512|staging|smallbind.*)$|^downstream_find_package$|^experiment_|_experiment_tiny$|^dist_train_|^gat_demo|^gat_train_(data_neuroskinning|eval_.*|loss|interrupt|vulkan)$|^gat_(skinweights_any|heat_blend|world_columns)$|^gat_blender_import$|^runtime_deform_clip$|^gat_distill$|^gat_joint_columns_nearest$|^gat_progress_tty$'
 fi
 
 # Each fuzzer for a bounded time on a scratch copy of its corpus (new inputs

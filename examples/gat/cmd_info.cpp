@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/io/bake.hpp"
@@ -185,6 +186,11 @@ void print_model(const std::string& path) {
     features += ", joint columns " + jc + " (each vertex's nearest joints: any skeleton)";
   if (const std::string scales = metadata(l.file, "distortion_scales", ""); !scales.empty())
     features += " + detail distortion at smoothing scales " + scales;
+  if (c.name == "skinweights-any")
+    features += gatcore::character::ignores_world_columns(l.norm)
+                    ? "; the vertex's world-frame position and normal ignored (--world-columns ignore): the same "
+                      "weights whichever way a character faces"
+                    : "; reads the vertex's world-frame position and normal (--world-columns use)";
   std::printf("features   %lld in, %lld out (%s)\n", static_cast<long long>(c.in_dim), static_cast<long long>(c.out_dim),
               features.c_str());
   std::printf("config\n");

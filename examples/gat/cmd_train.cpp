@@ -400,11 +400,10 @@ int run_train(TrainArgs a) {
     // A new model ignores the world-frame columns unless told to use them; a
     // checkpoint's normaliser already says which it does.
     if (from.empty() && a.world_columns != "use") character::ignore_world_columns(norm);
-    if (!from.empty() && !a.world_columns.empty() &&
-        (a.world_columns == "ignore") != character::ignores_world_columns(norm)) {
+    const bool ignores = character::ignores_world_columns(norm);
+    if (!from.empty() && !a.world_columns.empty() && (a.world_columns == "ignore") != ignores) {
       std::fprintf(stderr, "gat train: --world-columns %s: %s %s them; a resumed or fine-tuned model keeps its own\n",
-                   a.world_columns.c_str(), from.c_str(),
-                   character::ignores_world_columns(norm) ? "ignores" : "uses");
+                   a.world_columns.c_str(), from.c_str(), ignores ? "ignores" : "uses");
       return 2;
     }
   } else if (!a.world_columns.empty()) {
