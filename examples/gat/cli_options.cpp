@@ -16,12 +16,6 @@ std::string range_text(long long lo, long long hi) {
   return "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
 }
 
-std::string number_text(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", x);
-  return b;
-}
-
 constexpr std::size_t kHelpWidth = 100, kColumn = 34;
 
 // Greedy word wrap to `width` columns; existing line breaks are kept.
@@ -77,6 +71,12 @@ class GatFormatter : public CLI::Formatter {
 };
 
 }  // namespace
+
+std::string number_text(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", x);
+  return b;
+}
 
 void set_details(CLI::App& cmd, std::string text) { details()[&cmd] = std::move(text); }
 

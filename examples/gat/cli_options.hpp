@@ -24,6 +24,8 @@ CLI::Validator int_in(long long lo, long long hi);
 CLI::Validator number_in(double lo, double hi);  // finite, lo <= x <= hi
 CLI::Validator positive_number();                // finite, x > 0
 CLI::Validator one_of(std::vector<std::string> choices);
+// x as printf's %g writes it ("0.3", "1e-05"), for messages and labels.
+std::string number_text(double x);
 
 // The options most commands share, with the same names and help everywhere.
 struct CommonOptions {

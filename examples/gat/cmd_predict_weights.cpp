@@ -14,7 +14,6 @@
 #include "commands.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/io/gltf.hpp"
-#include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/character/rig/limit_weights.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
 #include "progress.hpp"
@@ -52,8 +51,8 @@ void print_weightless_joints(const Character& ch, const SkinWeights& w, const ch
                 count > 8 ? ", ..." : "");
 }
 
-// Bone heat's settings for CHARACTER: top k, the users' --bone / --control
-// joints (checked by name), min weight 0.01 unless given.
+// Bone heat's settings for CHARACTER: top k and the user's --bone / --control
+// joints (checked by name); min weight bone heat's default, 0.01.
 BoneHeatParams heat_params(const PredictArgs& a, const Character& ch, const std::string& in) {
   BoneHeatParams bp;
   const auto mark = [&](const std::vector<std::string>& names, std::int8_t value, const char* flag) {
@@ -71,7 +70,6 @@ BoneHeatParams heat_params(const PredictArgs& a, const Character& ch, const std:
     mark(a.controls, -1, "--control");
   }
   bp.max_influences = int(a.k);
-  bp.min_weight = a.min_weight < 0 ? 0.01f : float(a.min_weight);
   return bp;
 }
 
@@ -79,10 +77,8 @@ BoneHeatParams heat_params(const PredictArgs& a, const Character& ch, const std:
 // (welded) character; --min-weight applies after.
 void apply_heat_blend(const PredictArgs& a, const Character& ch, const std::string& in, SkinWeights& w) {
   if (a.heat_blend <= 0) return;
-  BoneHeatParams bp = heat_params(a, ch, in);
-  bp.min_weight = 0.01f;  // bone heat's own pruning; --min-weight applies to the mix
   Activity doing("computing the bone-heat weights of " + in + " for --heat-blend");
-  w = blend_weights(w, bone_heat_weights(ch, bp), float(a.heat_blend), int(a.k));
+  w = mix_with_bone_heat(ch, w, float(a.heat_blend), heat_params(a, ch, in));
 }
 
 void print_heat_blend(const PredictArgs& a) {
@@ -121,7 +117,8 @@ int run(const PredictArgs& a) {
                                      "bone-heat there is no model");
     stage("reading the character");
     const Character ch = load_gltf(in);
-    const BoneHeatParams bp = heat_params(a, ch, in);
+    BoneHeatParams bp = heat_params(a, ch, in);
+    if (min_weight >= 0) bp.min_weight = float(min_weight);
     Activity doing("computing the bone-heat weights of " + in);
     stage("bone heat: visibility and heat diffusion");
     const auto t0 = std::chrono::steady_clock::now();

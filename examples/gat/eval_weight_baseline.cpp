@@ -1,4 +1,5 @@
 #include "eval_weight_baseline.hpp"
+#include "cli_options.hpp"
 
 #include <chrono>
 #include <cstdio>
@@ -8,20 +9,11 @@
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
-#include "gatcore/character/rig/blend_weights.hpp"
 #include "progress.hpp"
 
 using namespace gatcore;
 
 namespace gat {
-
-namespace {
-std::string format_number(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
-}  // namespace
 
 int eval_weight_baseline(const std::string& method, const std::string& data, const std::string& part, long poses,
                          long seed, double min_weight, const std::string& json_path, bool quiet, int confusions,
@@ -60,14 +52,12 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     model->model->fold_batch_norm();
   }
   const std::int32_t B = td.super.num_bones();
-  // The blend's bone heat: the baseline's own settings (top 4, min weight 0.01).
-  const character::BoneHeatParams blend_heat;
   const std::string label =
-      model && heat_blend > 0 ? method + "+heat" + format_number(double(heat_blend)) : method;
+      model && heat_blend > 0 ? method + "+heat" + number_text(double(heat_blend)) : method;
   if (model)
     std::printf("gat eval: %s (top %d, min weight %.3g%s) on the %zu %s characters of %s\n", label.c_str(),
                 bp.max_influences, double(eo.min_weight),
-                heat_blend > 0 ? (", mixed with bone heat at " + format_number(double(heat_blend))).c_str() : "",
+                heat_blend > 0 ? (", mixed with bone heat at " + number_text(double(heat_blend))).c_str() : "",
                 chars.size(), part.c_str(), data.c_str());
   else
     std::printf("gat eval: bone heat (top %d, min weight %.3g) on the %zu %s characters of %s\n", bp.max_influences,
@@ -79,12 +69,12 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     const character::PreparedCharacter& pc = td.characters[std::size_t(c)];
     const auto& j2b = td.super.joint_to_bone[std::size_t(c)];
     const auto t0 = std::chrono::steady_clock::now();
-    character::SkinWeights w =
-        model ? character::predict_skin_weights_any(*model->model, model->norm, pc, bp.max_influences)
+    // The mix's bone heat: the baseline's own settings (top 4, min weight 0.01).
+    const character::SkinWeights w =
+        model ? character::mix_with_bone_heat(
+                    pc.character, character::predict_skin_weights_any(*model->model, model->norm, pc, bp.max_influences),
+                    heat_blend)
               : character::bone_heat_weights(pc.character, bp);
-    if (model && heat_blend > 0)
-      w = character::blend_weights(w, character::bone_heat_weights(pc.character, blend_heat), heat_blend,
-                                   bp.max_influences);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::vector<float> pred = character::super_weights(w, j2b, B);
     const std::vector<float> truth = character::super_weights(pc.character.mesh.weights, j2b, B);

@@ -7,7 +7,6 @@
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
-#include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/runtime.hpp"
@@ -68,17 +67,14 @@ character::SkinWeights WeightPredictor::predict(const character::Mesh& rest, con
   GATCORE_CHECK(n > 0 && ch.mesh.num_triangles() > 0, opt.name, ": the mesh has no triangles");
   GATCORE_CHECK(!model_->any || opt.aliases.pairs.empty(), opt.name,
                 ": aliases have no effect with skinweights-any (it matches no bone names)");
-  character::SkinWeights w =
+  const character::SkinWeights w =
       model_->any ? character::predict_skin_weights_any(*model_->lm.model, model_->lm.norm, ch, max_influences).weights
                   : character::predict_skin_weights(*model_->lm.model, model_->lm.norm, model_->bones, ch,
                                                     max_influences, opt.aliases)
                         .weights;
-  if (model_->heat_blend > 0.0f) {
-    character::BoneHeatParams bp;  // gat predict-weights --heat-blend's: min weight 0.01
-    bp.max_influences = max_influences;
-    w = character::blend_weights(w, character::bone_heat_weights(ch, bp), model_->heat_blend, max_influences);
-  }
-  return w;
+  character::BoneHeatParams bp;  // gat predict-weights --heat-blend's: min weight 0.01
+  bp.max_influences = max_influences;
+  return character::mix_with_bone_heat(ch, w, model_->heat_blend, bp);
 }
 
 }  // namespace gatcore::runtime

@@ -1,5 +1,6 @@
 #include "gatcore/character/deform/bone_heat.hpp"
 
+#include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/character/rig/bone_axis.hpp"
 
 #include <algorithm>
@@ -517,6 +518,12 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
     raw.ptr.push_back(static_cast<std::int64_t>(raw.joint.size()));
   }
   return limit_weights(raw, params.max_influences, params.min_weight);
+}
+
+SkinWeights mix_with_bone_heat(const Character& ch, const SkinWeights& model, float share,
+                               const BoneHeatParams& params) {
+  if (share == 0.0f) return model;
+  return blend_weights(model, bone_heat_weights(ch, params), share, params.max_influences);
 }
 
 }  // namespace gatcore::character

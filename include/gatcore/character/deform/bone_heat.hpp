@@ -68,6 +68,13 @@ struct BoneHeatParams {
 // mesh or skeleton is invalid or no joint deforms.
 SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params = {});
 
+// A model's weights for `ch` mixed with bone heat's (--heat-blend):
+// blend_weights(model, bone_heat_weights(ch, params), share,
+// params.max_influences) (rig/blend_weights.hpp); `model` itself, and no bone
+// heat computed, when share is 0.
+SkinWeights mix_with_bone_heat(const Character& ch, const SkinWeights& model, float share,
+                               const BoneHeatParams& params = {});
+
 // The bone segments of every joint (see above), bind frame: per joint a list
 // of (head, tail) pairs.
 struct BoneSegment {
