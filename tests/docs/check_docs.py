@@ -6,7 +6,8 @@
                                      front-path pages, page by page, in a fresh temp folder with
                                      the built gat first on PATH (the blocks of a page share it)
   check_docs.py references GAT SRC   every #include "gatcore/...", repository path, relative link
-                                     and `gat CMD --option` of the front-path pages exists
+                                     and `gat CMD --option` of the front-path pages exists, and
+                                     every <!-- include: FILE --> block equals FILE
 
 Front-path pages: README.md and docs/*.md (not docs/experiments/, the verbatim history).
 Paths another branch is about to create are listed in tests/docs/pending_paths.txt: they are
@@ -123,11 +124,13 @@ def subcommand_names(help_out):
 
 
 OPTION = re.compile(r"(?<![\w-])(--[a-z][a-z0-9-]*)")
-GAT_CALL = re.compile(r"(?:^|[\s/`(=$])gat((?:\s+[a-z][a-z-]*){0,2})([^`|;&]*)")
+# "gat" as a command: at a word start, or as the last part of a path (build/tools/gat);
+# group 1 says which, group 2 holds up to two command words, group 3 the rest of the call.
+GAT_CALL = re.compile(r"(?:^|[\s`(=$]|(/))gat(?![\w.-])((?:\s+[a-z][a-z-]*){0,2})([^`|;&]*)")
 
 
 def gat_calls(text):
-    """(command words, the rest) of every gat command line: code lines and `inline spans`."""
+    """(command words, the rest, whether gat stands alone) of every gat call: code lines and `spans`."""
     calls = []
     in_code = False
     pending = ""
@@ -142,11 +145,11 @@ def gat_calls(text):
             line, pending = pending + line, ""
             line = re.sub(r"\s#\s.*$", "", line)  # a trailing shell comment
             for m in GAT_CALL.finditer(line):
-                calls.append((m.group(1).split(), m.group(2)))
+                calls.append((m.group(2).split(), m.group(3), m.group(1) is None))
         else:
             for span in re.findall(r"`([^`]+)`", line):
                 for m in GAT_CALL.finditer(" " + span):
-                    calls.append((m.group(1).split(), m.group(2)))
+                    calls.append((m.group(2).split(), m.group(3), m.group(1) is None))
     return calls
 
 
@@ -184,6 +187,15 @@ def check_references(gat, src):
             text = f.read()
         if name == os.path.join("docs", "cli.md"):
             continue  # generated from gat help; docs_cli_reference checks it
+        # <!-- include: PATH --> blocks hold that file verbatim
+        for m in re.finditer(r"<!-- include: (\S+) -->\n```[a-z]*\n(.*?)\n```", text, re.S):
+            path = os.path.join(src, m.group(1))
+            if not os.path.exists(path):
+                errors.append(f"{name}: included file {m.group(1)} does not exist")
+                continue
+            with open(path, encoding="utf-8") as f:
+                if f.read().rstrip("\n") != m.group(2):
+                    errors.append(f"{name}: the copy of {m.group(1)} differs from the file: paste the file again")
         # headers
         for h in sorted(set(re.findall(r'#include\s*[<"](gatcore/[^>"]+)[>"]', text))):
             if not os.path.exists(os.path.join(src, "include", h)) and f"include/{h}" not in pending:
@@ -209,10 +221,10 @@ def check_references(gat, src):
             elif not os.path.exists(full):
                 errors.append(f"{name}: link {target} points to nothing")
         # gat commands and their options
-        for words, rest in gat_calls(text):
+        for words, rest, alone in gat_calls(text):
             cmd = resolve(gat, words)
             if cmd is None:
-                if words and words[0] not in ("help",) and not rest.strip().startswith("-"):
+                if alone:  # a path's gat may be followed by its arguments' paths
                     errors.append(f"{name}: 'gat {' '.join(words)}' is not a gat command")
                 continue
             h = help_text(gat, cmd)
