@@ -178,6 +178,19 @@ def load_pending(src):
     return out
 
 
+def anchors(path):
+    """GitHub's heading anchors of a Markdown file."""
+    out, in_code = set(), False
+    with open(path, encoding="utf-8") as f:
+        for line in f:
+            if line.strip().startswith("```"):
+                in_code = not in_code
+            elif not in_code and line.startswith("#"):
+                title = line.lstrip("#").strip().lower()
+                out.add(re.sub(r"[^\w\- ]", "", title).replace(" ", "-"))
+    return out
+
+
 def check_references(gat, src):
     errors, pending_used = [], set()
     pending = load_pending(src)
@@ -211,15 +224,17 @@ def check_references(gat, src):
                 errors.append(f"{name}: path {p} does not exist")
         # relative links
         for target in sorted(set(re.findall(r"\]\(([^)\s]+)\)", text))):
-            if re.match(r"^[a-z]+:", target) or target.startswith("#"):
+            if re.match(r"^[a-z]+:", target):
                 continue
-            path = target.split("#", 1)[0]
+            path = target.split("#", 1)[0] or os.path.basename(page)
             full = os.path.normpath(os.path.join(os.path.dirname(page), path))
             r = rel(src, full)
             if r in pending:
                 pending_used.add(r)
             elif not os.path.exists(full):
                 errors.append(f"{name}: link {target} points to nothing")
+            elif "#" in target and full.endswith(".md") and target.split("#", 1)[1] not in anchors(full):
+                errors.append(f"{name}: link {target}: no such heading in {r}")
         # gat commands and their options
         for words, rest, alone in gat_calls(text):
             cmd = resolve(gat, words)
