@@ -458,7 +458,13 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
     std::sort(cand.begin(), cand.end());
     nearest_any[v] = std::max(cand[0].first, dmin);
     ties(cand, 0, cand[0].first, target_any[v]);
+    // Blender's rule (nearest_only): only the nearest bones heat a vertex,
+    // and only when it sees them; a vertex whose nearest bone is hidden
+    // (behind an overlapping part) gets heat by diffusion alone, not from a
+    // farther bone it happens to see.
+    const double reach = std::max(cand[0].first, dmin) * (1 + 2 * kTie);
     for (std::size_t k = 0; k < cand.size(); ++k) {
+      if (params.nearest_only && std::max(cand[k].first, dmin) >= reach) break;
       if (params.visibility && bvh.blocked(pos[v], closest[cand[k].second], v)) continue;
       const double d = std::max(cand[k].first, dmin);
       h[v] = params.heat / (d * d);

@@ -44,6 +44,11 @@ namespace gatcore::character {
 struct BoneHeatParams {
   float heat = 1.0f;        // c in H = c / d^2 (Baran & Popovic: 1)
   bool visibility = true;   // a bone only heats vertices that see it (the segment to it crosses no triangle)
+  // Only a vertex's nearest bones heat it (when visible); a vertex whose
+  // nearest bone is hidden gets no heat of its own (Blender's automatic
+  // weights). false: the nearest *visible* bone heats it (Pinocchio's rule),
+  // which binds a part overlapped by another to whatever bone it sees.
+  bool nearest_only = true;
   int max_influences = 4;   // kept per vertex (largest), renormalised
   float min_weight = 0.01f; // influences below this fraction of the vertex's total dropped
   // A child whose direction from the joint makes a cosine below this with the

@@ -1,0 +1,32 @@
+"""Per-family table of bone_heat_peer's scores (scripts/bone_heat_vs_blender.sh)."""
+import json
+import os
+import sys
+from collections import defaultdict
+
+rows = [json.load(open(p)) for p in sys.argv[1:] if os.path.exists(p)]
+fam = defaultdict(list)
+for r in rows:
+    f = os.path.basename(os.path.dirname(r["character"]))
+    if f.startswith("gat_peer"):
+        f = "procedural"
+    fam[f].append(r)
+    fam["all"].append(r)
+
+
+def mean(xs):
+    return sum(xs) / len(xs) if xs else float("nan")
+
+
+print("| family | characters | gatcore L1 | Blender L1 | ratio | gatcore dominant | Blender dominant "
+      "| Blender-solved share | gatcore L1 (solved) | Blender L1 (solved) |")
+# "solved": the vertices Blender weighted at all (it gives up on a mesh object
+# with a piece no bone heats); those means skip characters with none.
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+for f, rs in sorted(fam.items(), key=lambda kv: (kv[0] == "all", kv[0])):
+    g, b = mean([r["gatcore_l1"] for r in rs]), mean([r["blender_l1"] for r in rs])
+    print(f"| {f} | {len(rs)} | {g:.3f} | {b:.3f} | {g / b:.2f} | {mean([r['gatcore_dominant'] for r in rs]):.3f} "
+          f"| {mean([r['blender_dominant'] for r in rs]):.3f} "
+          f"| {mean([r['solved_vertices'] / r['vertices'] for r in rs]):.2f} "
+          f"| {mean([r['gatcore_l1_solved'] for r in rs if r['solved_vertices']]):.3f} "
+          f"| {mean([r['blender_l1_solved'] for r in rs if r['solved_vertices']]):.3f} |")
