@@ -282,3 +282,37 @@ TEST_CASE("bone heat's joint overrides: the user's word over the control rules",
   p.joint_override = {-1, -1, -1};
   CHECK_THROWS_AS(bone_heat_weights(ch, p), gatcore::InvalidArgument);  // no joint deforms
 }
+
+TEST_CASE("only a vertex's nearest bone heats it: a piece behind the skin is not bound to a farther bone it sees",
+          "[bone_heat]") {
+  // A tube (bone1's segment from y = 1 to 1.5 inside it; the root a control)
+  // and a small loose piece P just outside its wall at x = 0.5, y = 1.2: P's
+  // nearest bone is bone1 (0.5 away), hidden by the wall; "Side", 0.7 away
+  // in the open, P sees. Blender's rule heats P from neither (the piece then
+  // goes to its nearest bone, bone1); Pinocchio's nearest *visible* bone
+  // binds it to Side.
+  Character ch = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  add_joint(ch.skeleton, "Side", 0, {1.2f, 1.2f, 0.0f});
+  const std::int64_t first = ch.mesh.num_vertices();
+  for (const Vec3& p : {Vec3{0.5f, 1.15f, -0.05f}, Vec3{0.5f, 1.25f, 0.0f}, Vec3{0.5f, 1.15f, 0.05f}}) {
+    ch.mesh.positions.insert(ch.mesh.positions.end(), {p[0], p[1], p[2]});
+    ch.mesh.weights.joint.push_back(1);
+    ch.mesh.weights.weight.push_back(1.0f);
+    ch.mesh.weights.ptr.push_back(static_cast<std::int64_t>(ch.mesh.weights.joint.size()));
+  }
+  const auto t = static_cast<std::int32_t>(first);
+  ch.mesh.triangles.insert(ch.mesh.triangles.end(), {t, t + 1, t + 2});
+  BoneHeatParams p;
+  p.deforming = {0, 1, 1};
+  const SkinWeights blender_rule = bone_heat_weights(ch, p);
+  p.nearest_only = false;
+  const SkinWeights pinocchio_rule = bone_heat_weights(ch, p);
+  check_partition(blender_rule, ch.mesh.num_vertices(), 3);
+  for (std::int64_t v = first; v < first + 3; ++v) {
+    CHECK(weight_of(blender_rule, v, 1) > 0.99f);
+    CHECK(weight_of(pinocchio_rule, v, 2) > 0.99f);
+  }
+  // The tube's own skin sees bone1 either way.
+  const std::int64_t mid = 0.6 * first;  // a ring at about y = 1.2
+  CHECK(weight_of(blender_rule, mid, 1) == Approx(weight_of(pinocchio_rule, mid, 1)).margin(1e-3));
+}
