@@ -49,6 +49,7 @@ TEST_CASE("bone heat on a two-bone tube follows the analytic exponential falloff
   const int rings = 81, segments = 32;
   const Character ch = charfix::tube_character(rings, segments, 2.0f, r, 0.0f);
   BoneHeatParams p;
+  p.heat = 1.0f;
   p.max_influences = 2;
   p.min_weight = 0.0f;
   const SkinWeights w = bone_heat_weights(ch, p);
@@ -98,10 +99,12 @@ TEST_CASE("bone heat leaves no vertex without weights on garments, seams and loo
   }
   const SkinWeights w = bone_heat_weights(ch);
   check_partition(w, n, 2);
-  // The sleeve is bound to its nearest bones (k = 1 / 0.35), with no heat
-  // flowing out of its open ends: w_bone1 = 0.5 cosh(k (y - 0.5)) / cosh(k / 2)
-  // below the joint, so 0.773 on root at y = 0.5, and the same on bone1 at 1.5.
-  const double expect = 1.0 - 0.5 / std::cosh(0.5 / 0.35);
+  // The sleeve is bound to its nearest bones (k = sqrt(c) / 0.35), with no
+  // heat flowing out of its open ends: w_bone1 = 0.5 cosh(k (y - 0.5)) /
+  // cosh(k / 2) below the joint, so 1 - 0.5 / cosh(k / 2) on root at y = 0.5
+  // (0.943 at c = 4), and the same on bone1 at 1.5.
+  const double k = std::sqrt(double(BoneHeatParams{}.heat)) / 0.35;
+  const double expect = 1.0 - 0.5 / std::cosh(0.5 * k);
   CHECK(weight_of(w, body, 0) == Approx(expect).margin(0.03));
   CHECK(weight_of(w, body + 7 * 17, 1) == Approx(expect).margin(0.03));
   // Seam columns are duplicated positions: welded, so both copies agree.

@@ -4,8 +4,9 @@
 // joint i is the equilibrium of heat diffusing over the mesh surface from the
 // joint's bones,
 //     (-Laplacian + H) w_i = H p_i,
-// H_vv = c / d_v^2 with d_v the distance from vertex v to its nearest visible
-// bone (0 when none is visible: the vertex only receives diffused heat),
+// H_vv = c / d_v^2 with d_v the distance from vertex v to its nearest bone
+// when v sees it (0 when it does not: the vertex only receives diffused heat;
+// BoneHeatParams::nearest_only),
 // p_i(v) = 1 when that bone is joint i's (split evenly among ties). The
 // Laplacian is the cotangent one with lumped (barycentric) areas; one sparse
 // LDLT factorisation per character, one solve per joint.
@@ -42,7 +43,11 @@
 namespace gatcore::character {
 
 struct BoneHeatParams {
-  float heat = 1.0f;        // c in H = c / d^2 (Baran & Popovic: 1)
+  // c in H = c / d^2, against the standard cotangent Laplace-Beltrami
+  // operator. Baran & Popovic's c = 1 is Blender's, but Blender's operator
+  // is a quarter of the standard one (per triangle cot / (edge faces) over
+  // 4 x the mixed Voronoi area): its automatic weights are c = 4 here.
+  float heat = 4.0f;
   bool visibility = true;   // a bone only heats vertices that see it (the segment to it crosses no triangle)
   // Only a vertex's nearest bones heat it (when visible); a vertex whose
   // nearest bone is hidden gets no heat of its own (Blender's automatic
