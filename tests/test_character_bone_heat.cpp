@@ -319,3 +319,46 @@ TEST_CASE("only a vertex's nearest bone heats it: a piece behind the skin is not
   const std::int64_t mid = 0.6 * first;  // a ring at about y = 1.2
   CHECK(weight_of(blender_rule, mid, 1) == Approx(weight_of(pinocchio_rule, mid, 1)).margin(1e-3));
 }
+
+TEST_CASE("facing distance: a surface goes to the bone behind it, not to a nearer one it faces", "[bone_heat]") {
+  // A torso bone R along y at x = 0 and an arm bone A parallel to it at
+  // x = 0.8; a patch of torso skin at x = 0.5 facing +x (towards the arm,
+  // like the chest under an arm). A is nearer (0.3 against 0.5), but the
+  // skin faces it: with facing_distance the patch goes to R, without to A.
+  Character ch;
+  ch.name = "facing";
+  add_joint(ch.skeleton, "R", -1, {0.0f, 0.0f, 0.0f});
+  add_joint(ch.skeleton, "T", 0, {0.0f, 2.0f, 0.0f});
+  add_joint(ch.skeleton, "A", 0, {0.8f, 0.6f, 0.0f});
+  add_joint(ch.skeleton, "A2", 2, {0.8f, 1.6f, 0.0f});
+  const int k = 5;
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) {
+      ch.mesh.positions.insert(ch.mesh.positions.end(), {0.5f, 0.8f + 0.1f * i, -0.2f + 0.1f * j});
+      ch.mesh.weights.joint.push_back(0);
+      ch.mesh.weights.weight.push_back(1.0f);
+      ch.mesh.weights.ptr.push_back(static_cast<std::int64_t>(ch.mesh.weights.joint.size()));
+    }
+  for (int i = 0; i + 1 < k; ++i)
+    for (int j = 0; j + 1 < k; ++j) {
+      // (y, z) grid wound so that the normal is +x.
+      const std::int32_t a = i * k + j, b = (i + 1) * k + j, c = a + 1, d = b + 1;
+      ch.mesh.triangles.insert(ch.mesh.triangles.end(), {a, b, c, c, b, d});
+    }
+  BoneHeatParams p;
+  p.deforming = {1, 1, 1, 1};
+  p.max_influences = 1;
+  const SkinWeights facing = bone_heat_weights(ch, p);
+  p.facing_distance = false;
+  const SkinWeights nearest = bone_heat_weights(ch, p);
+  for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) {
+    CHECK(weight_of(facing, v, 0) == 1.0f);
+    CHECK(weight_of(nearest, v, 2) == 1.0f);
+  }
+  // Wound the other way (normal -x), the arm is both nearer and behind the
+  // skin: A.
+  for (std::size_t t = 0; t < ch.mesh.triangles.size(); t += 3) std::swap(ch.mesh.triangles[t + 1], ch.mesh.triangles[t + 2]);
+  p.facing_distance = true;
+  const SkinWeights flipped = bone_heat_weights(ch, p);
+  for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) CHECK(weight_of(flipped, v, 2) == 1.0f);
+}

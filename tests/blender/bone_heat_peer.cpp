@@ -55,7 +55,8 @@ Score score(const std::vector<float>& pred, const std::vector<float>& truth, std
   return {weight_metrics(p, t, nj).l1_mean, dominant_accuracy(p, t, nj)};
 }
 
-int run(const std::string& glb, const std::string& json_in, const std::string& json_out, const BoneHeatParams& bp) {
+int run(const std::string& glb, const std::string& json_in, const std::string& json_out, const BoneHeatParams& bp,
+        int confusions) {
   const Character ch = load_character(glb);
   const std::int32_t nj = ch.skeleton.num_joints();
   const std::int64_t n = ch.mesh.num_vertices();
@@ -90,14 +91,34 @@ int run(const std::string& glb, const std::string& json_in, const std::string& j
   for (Eigen::Index k = 0; k < src.cols(); ++k)
     head_err = std::max(head_err, ((to_bind.topLeftCorner<3, 3>() * src.col(k) + to_bind.topRightCorner<3, 1>()) -
                                    dst.col(k)).norm());
-  std::vector<double> pos;
-  for (std::size_t i = 0; i + 2 < doc.at("positions").size(); i += 3) {
-    const Eigen::Vector3d p(doc.at("positions")[i].get<double>(), doc.at("positions")[i + 1].get<double>(),
-                            doc.at("positions")[i + 2].get<double>());
-    const Eigen::Vector3d q = to_bind.topLeftCorner<3, 3>() * p + to_bind.topRightCorner<3, 1>();
-    pos.insert(pos.end(), {q[0], q[1], q[2]});
-  }
-  const std::int64_t m = static_cast<std::int64_t>(pos.size() / 3);
+  const std::int64_t m = static_cast<std::int64_t>(doc.at("positions").size() / 3);
+  Eigen::Matrix3Xd raw(3, m), ours(3, n);
+  for (std::int64_t i = 0; i < m; ++i)
+    for (int c = 0; c < 3; ++c) raw(c, i) = doc.at("positions")[3 * i + c].get<double>();
+  for (std::int64_t v = 0; v < n; ++v)
+    for (int c = 0; c < 3; ++c) ours(c, v) = ch.mesh.positions[3 * v + c];
+  const double ours_diag = (ours.rowwise().maxCoeff() - ours.rowwise().minCoeff()).norm();
+  Eigen::Matrix4d fit = to_bind;
+  auto apply = [&](const Eigen::Matrix4d& t) {
+    return Eigen::Matrix3Xd((t.topLeftCorner<3, 3>() * raw).colwise() + t.topRightCorner<3, 1>());
+  };
+  // Heads that do not fit exactly (the importer rebuilt a rest pose that
+  // differs from the bind matrices): refine the fit on the vertices
+  // themselves, each Blender vertex to its nearest one of ours (iterative
+  // closest points). The artist-weight check below says whether it matched.
+  if (head_err > 1e-4 * ours_diag)
+    for (int round = 0; round < 20; ++round) {
+      const Eigen::Matrix3Xd at = apply(fit);
+      Eigen::Matrix3Xd near(3, m);
+      for (std::int64_t i = 0; i < m; ++i) {
+        Eigen::Index best = 0;
+        (ours.colwise() - at.col(i)).colwise().squaredNorm().minCoeff(&best);
+        near.col(i) = ours.col(best);
+      }
+      fit = Eigen::umeyama(raw, near, true);
+    }
+  const Eigen::Matrix3Xd moved = apply(fit);
+  std::vector<double> pos(moved.data(), moved.data() + 3 * m);
   GATCORE_CHECK(static_cast<std::int64_t>(doc.at("artist").size()) == m &&
                     static_cast<std::int64_t>(doc.at("auto").size()) == m,
                 json_in, ": ", m, " positions but ", doc.at("artist").size(), " artist and ", doc.at("auto").size(),
@@ -188,6 +209,18 @@ int run(const std::string& glb, const std::string& json_in, const std::string& j
               glb.c_str(), static_cast<long long>(n), nj, g.l1, g.dominant, secs, b.l1, b.dominant,
               doc.value("seconds", 0.0), static_cast<long long>(n_solved), gs.l1, bs.l1,
               static_cast<long long>(unmatched), static_cast<long long>(missing), unnamed, match_l1, head_err / diag);
+  for (const auto& [label, w] : {std::pair<const char*, const std::vector<float>*>{"gatcore", &heat},
+                                 {"blender", &blender}}) {
+    if (confusions <= 0) break;
+    std::printf("  %s's largest confusions (artist's joint -> predicted: vertices):", label);
+    int shown = 0;
+    for (const auto& [t, p, c] : dominant_confusions(*w, truth, nj)) {
+      if (shown++ == confusions) break;
+      std::printf(" %s->%s %lld;", ch.skeleton.names[t].c_str(), ch.skeleton.names[p].c_str(),
+                  static_cast<long long>(c));
+    }
+    std::printf("\n");
+  }
   if (!json_out.empty()) {
     nlohmann::json o = {{"character", glb},          {"vertices", n},        {"joints", nj},
                         {"gatcore_l1", g.l1},        {"gatcore_dominant", g.dominant},
@@ -225,17 +258,20 @@ int main(int argc, char** argv) {
     }
     // Bone heat's settings, for experiments: --heat C, --no-visibility.
     BoneHeatParams bp;
+    int confusions = 0;  // --confusions N: each method's N largest dominant-bone confusions
     std::vector<std::string> rest;
     for (std::size_t i = 0; i < a.size(); ++i) {
       if (a[i] == "--heat" && i + 1 < a.size()) bp.heat = std::stof(a[++i]);
       else if (a[i] == "--no-visibility") bp.visibility = false;
       else if (a[i] == "--nearest-visible") bp.nearest_only = false;
+      else if (a[i] == "--no-facing") bp.facing_distance = false;
+      else if (a[i] == "--confusions" && i + 1 < a.size()) confusions = std::stoi(a[++i]);
       else rest.push_back(a[i]);
     }
-    if (rest.size() == 2) return run(rest[0], rest[1], "", bp);
-    if (rest.size() == 4 && rest[2] == "--json") return run(rest[0], rest[1], rest[3], bp);
+    if (rest.size() == 2) return run(rest[0], rest[1], "", bp, confusions);
+    if (rest.size() == 4 && rest[2] == "--json") return run(rest[0], rest[1], rest[3], bp, confusions);
     std::fprintf(stderr,
-                 "usage: bone_heat_peer CHARACTER.glb BLENDER.json [--json OUT.json] [--heat C] [--no-visibility] [--nearest-visible]\n"
+                 "usage: bone_heat_peer CHARACTER.glb BLENDER.json [--json OUT.json] [--heat C] [--no-visibility] [--nearest-visible] [--no-facing] [--confusions N]\n"
                  "       bone_heat_peer --procedural humanoid|creature SEED OUT.glb\n");
     return 2;
   } catch (const std::exception& e) {

@@ -54,6 +54,11 @@ struct BoneHeatParams {
   // weights). false: the nearest *visible* bone heats it (Pinocchio's rule),
   // which binds a part overlapped by another to whatever bone it sees.
   bool nearest_only = true;
+  // A bone's distance from a vertex is divided by (1 + cos) / 2 (+ 0.0005),
+  // cos between the vertex normal and the direction from the bone to it
+  // (Blender's automatic weights): the bone the surface faces away from is
+  // nearer than one it faces. Needs outward normals (consistent winding).
+  bool facing_distance = true;
   int max_influences = 4;   // kept per vertex (largest), renormalised
   float min_weight = 0.01f; // influences below this fraction of the vertex's total dropped
   // A child whose direction from the joint makes a cosine below this with the
