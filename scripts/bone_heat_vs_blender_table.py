@@ -5,6 +5,14 @@ import sys
 from collections import defaultdict
 
 rows = [json.load(open(p)) for p in sys.argv[1:] if os.path.exists(p)]
+print("| character | vertices | joints | gatcore L1 | Blender L1 | gatcore dominant | Blender dominant "
+      "| Blender-solved vertices |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|")
+for r in rows:
+    name = os.path.basename(os.path.dirname(r["character"])) + "/" + os.path.basename(r["character"])
+    print(f"| {name} | {r['vertices']} | {r['joints']} | {r['gatcore_l1']:.3f} | {r['blender_l1']:.3f} "
+          f"| {r['gatcore_dominant']:.3f} | {r['blender_dominant']:.3f} | {r['solved_vertices']} |")
+print()
 fam = defaultdict(list)
 for r in rows:
     f = os.path.basename(os.path.dirname(r["character"]))
