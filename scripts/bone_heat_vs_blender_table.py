@@ -38,3 +38,21 @@ for f, rs in sorted(fam.items(), key=lambda kv: (kv[0] == "all", kv[0])):
           f"| {mean([r['solved_vertices'] / r['vertices'] for r in rs]):.2f} "
           f"| {mean([r['gatcore_l1_solved'] for r in rs if r['solved_vertices']]):.3f} "
           f"| {mean([r['blender_l1_solved'] for r in rs if r['solved_vertices']]):.3f} |")
+
+# Per boundary (eval/boundaries.hpp): of the vertices whose artist's dominant
+# joint is on either side, the share each method puts on the other side.
+acc = defaultdict(lambda: [0, 0, 0])
+for r in rows:
+    for which, col in (("gatcore_boundaries", 1), ("blender_boundaries", 2)):
+        for b in r.get(which, []):
+            if col == 1:
+                acc[b["boundary"]][0] += b["vertices"]
+            acc[b["boundary"]][col] += b["crossed"]
+if acc:
+    print()
+    print("| boundary | vertices | gatcore crossed | Blender crossed |")
+    print("|---|---:|---:|---:|")
+    for name in ("head/neck", "chest/neck", "hips/spine", "upper arm/chest", "knee", "ankle"):
+        if name in acc:
+            v, g, b = acc[name]
+            print(f"| {name} | {v} | {g / v:.3f} | {b / v:.3f} |")

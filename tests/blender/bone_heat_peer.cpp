@@ -25,6 +25,7 @@
 
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/eval/boundaries.hpp"
 #include "gatcore/character/eval/metrics.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/io/gltf.hpp"
@@ -220,8 +221,21 @@ int run(const std::string& glb, const std::string& json_in, const std::string& j
                   static_cast<long long>(c));
     }
     std::printf("\n");
+    const std::vector<BodyRegion> region = body_regions(ch.skeleton);
+    std::printf("  %s's boundaries (crossed / vertices):", label);
+    for (const auto& b : boundary_confusions(*w, truth, nj, region))
+      std::printf(" %s %lld/%lld;", boundary_name(b.boundary), static_cast<long long>(b.crossed),
+                  static_cast<long long>(b.vertices));
+    std::printf("\n");
   }
   if (!json_out.empty()) {
+    const std::vector<BodyRegion> region = body_regions(ch.skeleton);
+    auto boundaries = [&](const std::vector<float>& w) {
+      nlohmann::json list = nlohmann::json::array();
+      for (const auto& b : boundary_confusions(w, truth, nj, region))
+        list.push_back({{"boundary", boundary_name(b.boundary)}, {"vertices", b.vertices}, {"crossed", b.crossed}});
+      return list;
+    };
     nlohmann::json o = {{"character", glb},          {"vertices", n},        {"joints", nj},
                         {"gatcore_l1", g.l1},        {"gatcore_dominant", g.dominant},
                         {"blender_l1", b.l1},        {"blender_dominant", b.dominant},
@@ -229,6 +243,8 @@ int run(const std::string& glb, const std::string& json_in, const std::string& j
                         {"blender_l1_solved", bs.l1}, {"unmatched", unmatched},
                         {"missing", missing},        {"artist_match_l1", match_l1},
                         {"gatcore_seconds", secs},   {"blender_seconds", doc.value("seconds", 0.0)}};
+    o["gatcore_boundaries"] = boundaries(heat);
+    o["blender_boundaries"] = boundaries(blender);
     write_text_atomic(json_out, o.dump(1) + "\n");
   }
   // The match is right when Blender's artist weights, read through it, are
