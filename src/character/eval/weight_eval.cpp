@@ -104,6 +104,43 @@ std::vector<std::array<std::int64_t, 3>> dominant_confusions(std::span<const flo
   return out;
 }
 
+// Dominant bones as dominant_accuracy's (row_argmax), per boundary
+// (eval/boundaries.hpp).
+std::vector<BoundaryConfusion> boundary_confusions(std::span<const float> predicted, std::span<const float> truth,
+                                                   std::int64_t cols, std::span<const BodyRegion> column_region,
+                                                   std::span<const std::uint8_t> mask) {
+  check_dominant_args("boundary_confusions", predicted, truth, cols, mask);
+  GATCORE_CHECK(static_cast<std::int64_t>(column_region.size()) == cols, "boundary_confusions: ",
+                column_region.size(), " column regions for ", cols, " columns");
+  using R = BodyRegion;
+  constexpr std::array<std::pair<R, R>, 6> sides{{{R::head, R::neck},
+                                                  {R::chest, R::neck},
+                                                  {R::hips, R::spine},
+                                                  {R::upper_arm, R::chest},
+                                                  {R::upper_leg, R::lower_leg},
+                                                  {R::lower_leg, R::foot}}};
+  std::array<BoundaryConfusion, 6> acc{};
+  const std::int64_t n = static_cast<std::int64_t>(truth.size()) / cols;
+  for (std::int64_t v = 0; v < n; ++v) {
+    const std::int64_t t = row_argmax(truth, cols, v, mask), p = row_argmax(predicted, cols, v, mask);
+    if (t < 0) continue;
+    const R rt = column_region[static_cast<std::size_t>(t)], rp = column_region[static_cast<std::size_t>(p)];
+    for (std::size_t b = 0; b < sides.size(); ++b) {
+      const auto [x, y] = sides[b];
+      if (rt != x && rt != y) continue;
+      ++acc[b].vertices;
+      acc[b].crossed += rp == (rt == x ? y : x);
+    }
+  }
+  std::vector<BoundaryConfusion> out;
+  for (std::size_t b = 0; b < sides.size(); ++b)
+    if (acc[b].vertices > 0) {
+      acc[b].boundary = kBoundaries[b];
+      out.push_back(acc[b]);
+    }
+  return out;
+}
+
 CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std::span<const float> predicted_in,
                                                std::span<const float> truth, std::int64_t num_bones,
                                                const std::vector<std::int32_t>& joint_to_bone,
