@@ -22,8 +22,12 @@ for f in "$@"; do
     blender -b --factory-startup --python-exit-code 1 -P "$here/tests/blender/auto_weights.py" -- \
       "$f" "$cache/$name.json" $merge > "$cache/$name.log" 2>&1 || { echo "FAILED: Blender on $f (log: $cache/$name.log)"; continue; }
   fi
+  rm -f "$cache/$name.score.json"  # a failed run must not leave an old score in the table
   # shellcheck disable=SC2086  # PEER_FLAGS: bone heat settings to try (bone_heat_peer --help)
-  "$build/tests/bone_heat_peer" "$f" "$cache/$name.json" --json "$cache/$name.score.json" ${PEER_FLAGS:-} || echo "FAILED: $f"
-  scores="$scores $cache/$name.score.json"
+  if "$build/tests/bone_heat_peer" "$f" "$cache/$name.json" --json "$cache/$name.score.json" ${PEER_FLAGS:-}; then
+    scores="$scores $cache/$name.score.json"
+  else
+    echo "FAILED: $f"
+  fi
 done
 python3 "$here/scripts/bone_heat_vs_blender_table.py" $scores

@@ -228,6 +228,12 @@ int run(const std::string& glb, const std::string& json_in, const std::string& j
                   static_cast<long long>(b.vertices));
     std::printf("\n");
   }
+  // The match is right when Blender's artist weights, read through it, are
+  // gatcore's own; only then is a score written.
+  if (unmatched > 0 || missing > 0 || unnamed > 0 || match_l1 > 1e-3) {
+    std::fprintf(stderr, "bone_heat_peer: %s: Blender's vertices do not match gatcore's (see above)\n", glb.c_str());
+    return 1;
+  }
   if (!json_out.empty()) {
     const std::vector<BodyRegion> region = body_regions(ch.skeleton);
     auto boundaries = [&](const std::vector<float>& w) {
@@ -246,12 +252,6 @@ int run(const std::string& glb, const std::string& json_in, const std::string& j
     o["gatcore_boundaries"] = boundaries(heat);
     o["blender_boundaries"] = boundaries(blender);
     write_text_atomic(json_out, o.dump(1) + "\n");
-  }
-  // The match is right when Blender's artist weights, read through it, are
-  // gatcore's own.
-  if (unmatched > 0 || missing > 0 || unnamed > 0 || match_l1 > 1e-3) {
-    std::fprintf(stderr, "bone_heat_peer: %s: Blender's vertices do not match gatcore's (see above)\n", glb.c_str());
-    return 1;
   }
   return 0;
 }
