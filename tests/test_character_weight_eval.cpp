@@ -213,3 +213,112 @@ TEST_CASE("weight evaluation: summary, Markdown and JSON", "[character][weightev
   CHECK_FALSE(std::filesystem::exists(path + ".tmp"));
   CHECK_THROWS_WITH(write_text_atomic("/nonexistent_dir_gatcore/x.json", "{}"), Contains("/nonexistent_dir_gatcore/x.json"));
 }
+
+namespace {
+
+Skeleton named_skeleton(const std::vector<std::pair<std::string, std::int32_t>>& joints) {
+  Skeleton s;
+  for (const auto& [name, parent] : joints) {
+    s.names.push_back(name);
+    s.parents.push_back(parent);
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("body regions from joint names and the hierarchy, in several naming schemes", "[character][weighteval]") {
+  using R = BodyRegion;
+  // Mixamo: Spine2 is the chest (the neck's parent), Spine / Spine1 the spine.
+  const Skeleton mixamo = named_skeleton({{"mixamorig:Hips", -1},         {"mixamorig:Spine", 0},
+                                          {"mixamorig:Spine1", 1},        {"mixamorig:Spine2", 2},
+                                          {"mixamorig:Neck", 3},          {"mixamorig:Head", 4},
+                                          {"mixamorig:HeadTop_End", 5},   {"mixamorig:LeftShoulder", 3},
+                                          {"mixamorig:LeftArm", 7},       {"mixamorig:LeftForeArm", 8},
+                                          {"mixamorig:LeftUpLeg", 0},     {"mixamorig:LeftLeg", 10},
+                                          {"mixamorig:LeftFoot", 11},     {"mixamorig:LeftToeBase", 12}});
+  CHECK(body_regions(mixamo) == std::vector<R>{R::hips, R::spine, R::spine, R::chest, R::neck, R::head, R::head,
+                                               R::other, R::upper_arm, R::other, R::upper_leg, R::lower_leg,
+                                               R::foot, R::other});
+  // Quaternius: Root, Hips, Abdomen, Torso, Chest, ...; joints under the head
+  // (a jaw) are the head; an unnamed joint between hips and chest is spine.
+  const Skeleton quat = named_skeleton({{"Root", -1},      {"Hips", 0},        {"Abdomen", 1},   {"Mid", 2},
+                                        {"Chest", 3},      {"Neck", 4},        {"Head", 5},      {"Jaw", 6},
+                                        {"UpperArm.L", 4}, {"LowerArm.L", 8},  {"UpperLeg.R", 1}, {"LowerLeg.R", 10},
+                                        {"Foot.R", 11}});
+  CHECK(body_regions(quat) == std::vector<R>{R::other, R::hips, R::spine, R::spine, R::chest, R::neck, R::head,
+                                             R::head, R::upper_arm, R::other, R::upper_leg, R::lower_leg, R::foot});
+  // Unreal: pelvis, spine_01..03 (spine_03 under the neck: chest), thigh / calf.
+  const Skeleton ue = named_skeleton({{"root", -1},  {"pelvis", 0},   {"spine_01", 1}, {"spine_03", 2},
+                                      {"neck_01", 3}, {"head", 4},    {"upperarm_l", 3}, {"thigh_l", 1},
+                                      {"calf_l", 7},  {"foot_l", 8}});
+  CHECK(body_regions(ue) == std::vector<R>{R::other, R::hips, R::spine, R::chest, R::neck, R::head, R::upper_arm,
+                                           R::upper_leg, R::lower_leg, R::foot});
+  // Names that say nothing: all other.
+  const Skeleton bare = named_skeleton({{"Node_0", -1}, {"Node_1", 0}});
+  CHECK(body_regions(bare) == std::vector<R>{R::other, R::other});
+}
+
+TEST_CASE("boundary confusions count the vertices each boundary's sides trade", "[character][weighteval]") {
+  using R = BodyRegion;
+  // Columns: head, neck, chest, upper leg, lower leg, other.
+  const std::vector<R> region{R::head, R::neck, R::chest, R::upper_leg, R::lower_leg, R::other};
+  auto row = [](int c) {
+    std::vector<float> r(6, 0.0f);
+    r[static_cast<std::size_t>(c)] = 1.0f;
+    return r;
+  };
+  // (artist's column, predicted column) per vertex.
+  const std::vector<std::pair<int, int>> v{{0, 0}, {0, 1}, {1, 0}, {1, 1}, {1, 2}, {2, 2},
+                                           {3, 4}, {4, 4}, {5, 3}, {2, 5}};
+  std::vector<float> truth, pred;
+  for (const auto& [t, p] : v) {
+    const auto a = row(t), b = row(p);
+    truth.insert(truth.end(), a.begin(), a.end());
+    pred.insert(pred.end(), b.begin(), b.end());
+  }
+  const auto bc = boundary_confusions(pred, truth, 6, region);
+  // head/neck: artist's head or neck: vertices 0-4 (5), crossed: 0->1, 1->0 (2).
+  // chest/neck: neck or chest: 2, 3, 4, 5, 9 (5), crossed: 1->2 (1).
+  // upper arm/chest: the chest's vertices 5 and 9 (2), none crossed (an
+  // "other" column predicted is no crossing). knee: upper or lower leg: 6, 7
+  // (2), crossed: 3->4 (1). ankle: the lower leg's vertex 7 (1), not
+  // crossed. hips/spine has no vertices.
+  REQUIRE(bc.size() == 5);
+  CHECK(bc[0].boundary == Boundary::head_neck);
+  CHECK(bc[0].vertices == 5);
+  CHECK(bc[0].crossed == 2);
+  CHECK(bc[1].boundary == Boundary::chest_neck);
+  CHECK(bc[1].vertices == 5);
+  CHECK(bc[1].crossed == 1);
+  CHECK(bc[2].boundary == Boundary::upper_arm_chest);
+  CHECK(bc[2].vertices == 2);
+  CHECK(bc[2].crossed == 0);
+  CHECK(bc[3].boundary == Boundary::knee);
+  CHECK(bc[3].vertices == 2);
+  CHECK(bc[3].crossed == 1);
+  CHECK(bc[4].boundary == Boundary::ankle);
+  CHECK(bc[4].vertices == 1);
+  CHECK(bc[4].crossed == 0);
+  CHECK(std::string(boundary_name(Boundary::upper_arm_chest)) == "upper arm/chest");
+  // Masked out, the neck column is no one's dominant bone (rows with nothing
+  // left go to the first column, as in dominant_accuracy): head/neck keeps
+  // its 5 vertices, all on the head side, none crossed.
+  const std::vector<std::uint8_t> mask{1, 0, 1, 1, 1, 1};
+  const auto masked = boundary_confusions(pred, truth, 6, region, mask);
+  REQUIRE(!masked.empty());
+  CHECK(masked[0].boundary == Boundary::head_neck);
+  CHECK(masked[0].vertices == 5);
+  CHECK(masked[0].crossed == 0);
+  CHECK_THROWS_WITH(boundary_confusions(pred, truth, 6, std::vector<R>(5)), Contains("5 column regions for 6"));
+  // The Markdown and JSON carry them when confusions are asked for.
+  CharacterWeightEval c;
+  c.name = "men/A";
+  c.boundaries = bc;
+  const std::string md = weight_eval_confusions_markdown({c}, 1);
+  CHECK_THAT(md, Contains("boundaries (crossed / vertices): head/neck 2/5; chest/neck 1/5; upper arm/chest 0/2; knee 1/2; ankle 0/1;\n"));
+  CHECK_THAT(md, Contains("| head/neck | 5 | 2 | 0.400 |"));
+  const auto j = nlohmann::json::parse(weight_eval_json("m", {c}, WeightEvalOptions{}, 1));
+  CHECK(j.at("characters")[0].at("boundaries")[3].at("boundary") == "knee");
+  CHECK(j.at("overall").at("boundaries")[0].at("crossed") == 2);
+}

@@ -440,6 +440,24 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
     }
     for (const auto& [j, share] : js) out.push_back({j, share / sum});
   };
+  // Vertex normals (the sum of the unit normals of the vertex's triangles),
+  // for facing_distance.
+  std::vector<V3> normal(static_cast<std::size_t>(m), V3{0, 0, 0});
+  if (params.facing_distance) {
+    for (std::size_t t = 0; t < tris.size(); t += 3) {
+      V3 f = cross(sub(pos[tris[t + 1]], pos[tris[t]]), sub(pos[tris[t + 2]], pos[tris[t]]));
+      const double l = norm(f);
+      if (!(l > 0)) continue;
+      for (double& x : f) x /= l;
+      for (int k = 0; k < 3; ++k)
+        for (int c = 0; c < 3; ++c) normal[tris[t + k]][c] += f[c];
+    }
+    for (V3& nv : normal) {
+      const double l = norm(nv);
+      if (l > 0)
+        for (double& x : nv) x /= l;
+    }
+  }
   std::vector<std::pair<double, std::int32_t>> cand;
   std::vector<V3> closest(bones.size());
   for (std::int32_t v = 0; v < m; ++v) {
@@ -451,14 +469,27 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
       // child (a leaf foot beyond the shin's end) wins the tie. The handicap
       // grows over the first 1e-3 of the diagonal past the tail, so a vertex
       // on the joint's plane is not tipped one way or the other by rounding.
-      const double d = norm(sub(closest[b], pos[v]));
+      const V3 out = sub(pos[v], closest[b]);
+      double d = norm(out);
+      // facing_distance: a bone on the side the surface faces (the normal
+      // points at it: an arm seen from the chest under it, a leg from the
+      // inside of the other) is that much farther, (1 + cos) / 2 with cos
+      // between the normal and the direction from the bone to the vertex.
+      if (params.facing_distance && d > 0 && dot(normal[v], normal[v]) > 0)
+        d /= 0.5 * (dot(out, normal[v]) / d + 1.001);
       const double r = std::min(1.0, past / (1e-3 * diag));
       cand.push_back({d * (1 + 1e-3 * r) + 1e-9 * diag * r, static_cast<std::int32_t>(b)});
     }
     std::sort(cand.begin(), cand.end());
     nearest_any[v] = std::max(cand[0].first, dmin);
     ties(cand, 0, cand[0].first, target_any[v]);
+    // Blender's rule (nearest_only): only the nearest bones heat a vertex,
+    // and only when it sees them; a vertex whose nearest bone is hidden
+    // (behind an overlapping part) gets heat by diffusion alone, not from a
+    // farther bone it happens to see.
+    const double reach = std::max(cand[0].first, dmin) * (1 + 2 * kTie);
     for (std::size_t k = 0; k < cand.size(); ++k) {
+      if (params.nearest_only && std::max(cand[k].first, dmin) >= reach) break;
       if (params.visibility && bvh.blocked(pos[v], closest[cand[k].second], v)) continue;
       const double d = std::max(cand[k].first, dmin);
       h[v] = params.heat / (d * d);

@@ -104,6 +104,43 @@ std::vector<std::array<std::int64_t, 3>> dominant_confusions(std::span<const flo
   return out;
 }
 
+// Dominant bones as dominant_accuracy's (row_argmax), per boundary
+// (eval/boundaries.hpp).
+std::vector<BoundaryConfusion> boundary_confusions(std::span<const float> predicted, std::span<const float> truth,
+                                                   std::int64_t cols, std::span<const BodyRegion> column_region,
+                                                   std::span<const std::uint8_t> mask) {
+  check_dominant_args("boundary_confusions", predicted, truth, cols, mask);
+  GATCORE_CHECK(static_cast<std::int64_t>(column_region.size()) == cols, "boundary_confusions: ",
+                column_region.size(), " column regions for ", cols, " columns");
+  using R = BodyRegion;
+  constexpr std::array<std::pair<R, R>, 6> sides{{{R::head, R::neck},
+                                                  {R::chest, R::neck},
+                                                  {R::hips, R::spine},
+                                                  {R::upper_arm, R::chest},
+                                                  {R::upper_leg, R::lower_leg},
+                                                  {R::lower_leg, R::foot}}};
+  std::array<BoundaryConfusion, 6> acc{};
+  const std::int64_t n = static_cast<std::int64_t>(truth.size()) / cols;
+  for (std::int64_t v = 0; v < n; ++v) {
+    const std::int64_t t = row_argmax(truth, cols, v, mask), p = row_argmax(predicted, cols, v, mask);
+    if (t < 0) continue;
+    const R rt = column_region[static_cast<std::size_t>(t)], rp = column_region[static_cast<std::size_t>(p)];
+    for (std::size_t b = 0; b < sides.size(); ++b) {
+      const auto [x, y] = sides[b];
+      if (rt != x && rt != y) continue;
+      ++acc[b].vertices;
+      acc[b].crossed += rp == (rt == x ? y : x);
+    }
+  }
+  std::vector<BoundaryConfusion> out;
+  for (std::size_t b = 0; b < sides.size(); ++b)
+    if (acc[b].vertices > 0) {
+      acc[b].boundary = kBoundaries[b];
+      out.push_back(acc[b]);
+    }
+  return out;
+}
+
 CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std::span<const float> predicted_in,
                                                std::span<const float> truth, std::int64_t num_bones,
                                                const std::vector<std::int32_t>& joint_to_bone,
@@ -151,6 +188,12 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
       wrong += c;
     }
     r.dominant = n > 0 ? static_cast<double>(n - wrong) / static_cast<double>(n) : 0.0;
+    const std::vector<BodyRegion> joint_region = body_regions(pc.character.skeleton);
+    std::vector<BodyRegion> column_region(static_cast<std::size_t>(num_bones), BodyRegion::other);
+    for (std::size_t j = 0; j < joint_to_bone.size(); ++j)
+      if (joint_to_bone[j] >= 0 && joint_to_bone[j] < num_bones)
+        column_region[static_cast<std::size_t>(joint_to_bone[j])] = joint_region[j];
+    r.boundaries = boundary_confusions(predicted, truth, num_bones, column_region, mask);
   }
   r.vertex_l1.resize(static_cast<std::size_t>(n));
   for (std::int64_t v = 0; v < n; ++v) {
@@ -250,6 +293,31 @@ std::string weight_eval_markdown(const std::vector<CharacterWeightEval>& per_cha
   return s;
 }
 
+namespace {
+
+// Per boundary, the characters' vertices and crossings summed.
+std::vector<BoundaryConfusion> sum_boundaries(const std::vector<CharacterWeightEval>& per_character) {
+  std::vector<BoundaryConfusion> total;
+  for (const Boundary b : kBoundaries) {
+    BoundaryConfusion t;
+    t.boundary = b;
+    for (const auto& c : per_character)
+      for (const auto& x : c.boundaries)
+        if (x.boundary == b) t.vertices += x.vertices, t.crossed += x.crossed;
+    if (t.vertices > 0) total.push_back(t);
+  }
+  return total;
+}
+
+nlohmann::json boundaries_json(const std::vector<BoundaryConfusion>& bs) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& b : bs)
+    list.push_back({{"boundary", boundary_name(b.boundary)}, {"vertices", b.vertices}, {"crossed", b.crossed}});
+  return list;
+}
+
+}  // namespace
+
 std::string weight_eval_confusions_markdown(const std::vector<CharacterWeightEval>& per_character, int top) {
   if (top < 1) return {};
   std::string s = "\nDominant bone: where it differs from the artist's (artist's joint -> predicted joint: vertices)\n";
@@ -260,6 +328,23 @@ std::string weight_eval_confusions_markdown(const std::vector<CharacterWeightEva
       s += std::string(i ? "," : "") + " " + c.confusions[i].truth + " -> " + c.confusions[i].predicted + ": " +
            std::to_string(c.confusions[i].vertices);
     s += "\n";
+    if (!c.boundaries.empty()) {
+      s += "  boundaries (crossed / vertices):";
+      for (const auto& b : c.boundaries)
+        s += std::string(" ") + boundary_name(b.boundary) + " " + std::to_string(b.crossed) + "/" +
+             std::to_string(b.vertices) + ";";
+      s += "\n";
+    }
+  }
+  const auto total = sum_boundaries(per_character);
+  if (!total.empty()) {
+    s += "\n| boundary | vertices | crossed | crossed share |\n|---|---:|---:|---:|\n";
+    for (const auto& b : total) {
+      char share[32];
+      std::snprintf(share, sizeof share, "%.3f", static_cast<double>(b.crossed) / static_cast<double>(b.vertices));
+      s += std::string("| ") + boundary_name(b.boundary) + " | " + std::to_string(b.vertices) + " | " +
+           std::to_string(b.crossed) + " | " + share + " |\n";
+    }
   }
   return s;
 }
@@ -290,11 +375,13 @@ std::string weight_eval_json(const std::string& method, const std::vector<Charac
       for (std::size_t k = 0; k < cs.size() && k < static_cast<std::size_t>(confusions); ++k)
         list.push_back({{"truth", cs[k].truth}, {"predicted", cs[k].predicted}, {"vertices", cs[k].vertices}});
       j["characters"][i]["confusions"] = std::move(list);
+      j["characters"][i]["boundaries"] = boundaries_json(per_character[i].boundaries);
     }
   const WeightEvalSummary o = summarise_weight_eval(per_character);
   j["overall"] = {{"characters", o.characters}, {"precision", o.precision},     {"recall", o.recall},
                   {"l1_mean", o.l1_mean},       {"l1_max", o.l1_max},           {"deform_mean", o.deform_mean},
                   {"deform_max", o.deform_max}, {"dominant", o.dominant}};
+  if (confusions > 0) j["overall"]["boundaries"] = boundaries_json(sum_boundaries(per_character));
   return j.dump(2) + "\n";
 }
 

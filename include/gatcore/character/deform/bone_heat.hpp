@@ -4,8 +4,9 @@
 // joint i is the equilibrium of heat diffusing over the mesh surface from the
 // joint's bones,
 //     (-Laplacian + H) w_i = H p_i,
-// H_vv = c / d_v^2 with d_v the distance from vertex v to its nearest visible
-// bone (0 when none is visible: the vertex only receives diffused heat),
+// H_vv = c / d_v^2 with d_v the distance from vertex v to its nearest bone
+// when v sees it (0 when it does not: the vertex only receives diffused heat;
+// BoneHeatParams::nearest_only),
 // p_i(v) = 1 when that bone is joint i's (split evenly among ties). The
 // Laplacian is the cotangent one with lumped (barycentric) areas; one sparse
 // LDLT factorisation per character, one solve per joint.
@@ -42,8 +43,22 @@
 namespace gatcore::character {
 
 struct BoneHeatParams {
-  float heat = 1.0f;        // c in H = c / d^2 (Baran & Popovic: 1)
+  // c in H = c / d^2, against the standard cotangent Laplace-Beltrami
+  // operator. Baran & Popovic's c = 1 is Blender's, but Blender's operator
+  // is a quarter of the standard one (per triangle cot / (edge faces) over
+  // 4 x the mixed Voronoi area): its automatic weights are c = 4 here.
+  float heat = 4.0f;
   bool visibility = true;   // a bone only heats vertices that see it (the segment to it crosses no triangle)
+  // Only a vertex's nearest bones heat it (when visible); a vertex whose
+  // nearest bone is hidden gets no heat of its own (Blender's automatic
+  // weights). false: the nearest *visible* bone heats it (Pinocchio's rule),
+  // which binds a part overlapped by another to whatever bone it sees.
+  bool nearest_only = true;
+  // A bone's distance from a vertex is divided by (1 + cos) / 2 (+ 0.0005),
+  // cos between the vertex normal and the direction from the bone to it
+  // (Blender's automatic weights): the bone the surface faces away from is
+  // nearer than one it faces. Needs outward normals (consistent winding).
+  bool facing_distance = true;
   int max_influences = 4;   // kept per vertex (largest), renormalised
   float min_weight = 0.01f; // influences below this fraction of the vertex's total dropped
   // A child whose direction from the joint makes a cosine below this with the

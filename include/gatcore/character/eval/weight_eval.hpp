@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "gatcore/character/data/dataset.hpp"
+#include "gatcore/character/eval/boundaries.hpp"
 #include "gatcore/character/eval/metrics.hpp"
 
 namespace gatcore::character {
@@ -48,6 +49,9 @@ struct CharacterWeightEval {
   // joints, most vertices first. Shows which boundaries a method places
   // differently from the artist (e.g. a neck given to the head).
   std::vector<BoneConfusion> confusions;
+  // The same per boundary artists place by eye (head/neck, ..., ankle), the
+  // joints' body regions from their names (eval/boundaries.hpp).
+  std::vector<BoundaryConfusion> boundaries;
 };
 
 // Dense [n x num_bones] super-skeleton weights -> the character's joints
@@ -99,10 +103,12 @@ std::vector<std::array<std::int64_t, 3>> dominant_confusions(std::span<const flo
 // A Markdown table: one row per character and an "overall" row.
 std::string weight_eval_markdown(const std::vector<CharacterWeightEval>& per_character);
 // Markdown: per character, its `top` largest confusions ("artist's joint ->
-// predicted joint: vertices"); empty if top < 1.
+// predicted joint: vertices") and its boundaries' (crossed / vertices), then
+// a table per boundary over all characters; empty if top < 1.
 std::string weight_eval_confusions_markdown(const std::vector<CharacterWeightEval>& per_character, int top);
 // JSON text: {"method", "options", "characters": [...], "overall": {...}};
-// each character lists its `confusions` largest confusions (0: none).
+// each character lists its `confusions` largest confusions and its
+// boundaries, "overall" the boundaries summed (0: none of them).
 std::string weight_eval_json(const std::string& method, const std::vector<CharacterWeightEval>& per_character,
                              const WeightEvalOptions& opts, int confusions = 0);
 
