@@ -168,4 +168,9 @@ void unregister_backend(Device d);
 // Moves / copies a tensor to another device (a no-op view when already there).
 Tensor to(const Tensor& t, Device d);
 
+// The SIMD path the CPU kernels take now ("scalar", "avx2", "avx512";
+// GATCORE_SIMD may force a lower one) and the best this CPU supports.
+const char* cpu_simd_level_name();
+const char* cpu_detected_simd_level_name();
+
 }  // namespace gatcore
