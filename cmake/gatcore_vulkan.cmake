@@ -1,5 +1,5 @@
 # The Vulkan compute backend (src/backends/vulkan/ with its shaders/), included by the top-level
-# CMakeLists.txt after the gatcore target exists.
+# CMakeLists.txt after the gatcore_core target exists.
 #
 # GATCORE_VULKAN=AUTO builds it when the Vulkan headers/loader and
 # glslangValidator are found, ON requires them, OFF skips it. Every
@@ -62,11 +62,11 @@ if(GATCORE_HAVE_VULKAN)
   set(GATCORE_VK_SHADER_TABLE "${_gatcore_vk_table}")
   configure_file(${PROJECT_SOURCE_DIR}/src/backends/vulkan/shaders_embedded.cpp.in ${_spv_dir}/shaders_embedded.cpp @ONLY)
   set_source_files_properties(${_spv_dir}/shaders_embedded.cpp PROPERTIES OBJECT_DEPENDS "${_incs}")
-  target_sources(gatcore PRIVATE ${_gatcore_vk_sources} ${_spv_dir}/shaders_embedded.cpp ${_incs})
-  target_include_directories(gatcore PRIVATE ${PROJECT_BINARY_DIR})
-  target_link_libraries(gatcore PRIVATE Vulkan::Vulkan)
-  target_compile_definitions(gatcore PUBLIC GATCORE_HAS_VULKAN=1)
-  get_target_property(_gatcore_type gatcore TYPE)
+  target_sources(gatcore_core PRIVATE ${_gatcore_vk_sources} ${_spv_dir}/shaders_embedded.cpp ${_incs})
+  target_include_directories(gatcore_core PRIVATE ${PROJECT_BINARY_DIR})
+  target_link_libraries(gatcore_core PRIVATE Vulkan::Vulkan)
+  target_compile_definitions(gatcore_core PUBLIC GATCORE_HAS_VULKAN=1)
+  get_target_property(_gatcore_type gatcore_core TYPE)
   if(_gatcore_type STREQUAL "STATIC_LIBRARY")
     set(GATCORE_CONFIG_FIND_VULKAN ON)
   endif()

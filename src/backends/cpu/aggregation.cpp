@@ -1,6 +1,6 @@
 // Multi-head aggregation (SpMM with per-edge, per-head weights) and its
 // backward. Generic path for any H, F plus an H = 8, F = 8 register path, each
-// for scalar / AVX2 / AVX-512 (see kernels/attn_simd.hpp).
+// for scalar / AVX2 / AVX-512 (see attn_simd.hpp).
 #include "src/backends/cpu/aggregation.hpp"
 
 #include "src/backends/cpu/attn_simd.hpp"

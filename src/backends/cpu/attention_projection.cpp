@@ -1,6 +1,6 @@
 // Additive attention projection el = <a_l, z^k>, er = <a_r, z^k> per head and
 // its backward. Generic path for any H, F plus an H = 8, F = 8 register path,
-// each for scalar / AVX2 / AVX-512 (see kernels/attn_simd.hpp).
+// each for scalar / AVX2 / AVX-512 (see attn_simd.hpp).
 #include "src/backends/cpu/attention_projection.hpp"
 
 #include "src/backends/cpu/attn_simd.hpp"

@@ -11,7 +11,7 @@
 //  - a fast one for H = 8, F = 8 written against `Ops88` (Ops88Avx2: one
 //    ymm per head; Ops88Avx512: one zmm per two heads), where the 8 heads of
 //    a row are one register and the row of 64 features stays in registers.
-// The family's implementation lives in kernels/attn_*_impl.inc and is
+// The family's implementation lives in attn_*_impl.inc and is
 // included once per ISA inside an ATTN_BEGIN_* / ATTN_END region (a GCC
 // target pragma), so the same source is compiled for each instruction set
 // and dispatched on cpu::simd_level() at run time. The library itself is

@@ -1,6 +1,6 @@
 // Per-head edge softmax (additive and dot-product logits) and its backward.
 // Generic path for any H, F plus an H = 8 register path (additive: any F;
-// dot: F = 8), each for scalar / AVX2 / AVX-512 (see kernels/attn_simd.hpp).
+// dot: F = 8), each for scalar / AVX2 / AVX-512 (see attn_simd.hpp).
 #include "src/backends/cpu/edge_softmax.hpp"
 
 #include "src/backends/cpu/attn_simd.hpp"

@@ -2,7 +2,7 @@
 // destination row, storing only alpha [E, H]; backward recomputes d_alpha per
 // row and gathers the source-side terms through the transpose. Generic path
 // for any H, F plus an H = 8, F = 8 register path, each for scalar / AVX2 /
-// AVX-512 (see kernels/attn_simd.hpp).
+// AVX-512 (see attn_simd.hpp).
 #include "src/backends/cpu/gat_fused.hpp"
 
 #include "src/backends/cpu/attn_simd.hpp"

@@ -1,5 +1,5 @@
 // Masked row softmax. The forward has AVX2 / AVX-512 paths (vectorised exp,
-// kernels/fast_math.hpp); the baseline uses std::exp.
+// fast_math.hpp); the baseline uses std::exp.
 #include "src/backends/cpu/row_softmax.hpp"
 
 #include <cmath>

@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Adam with bias correction c1 = 1/(1-b1^t), c2 = 1/(1-b2^t) (kernels/optimizer.hpp)
+// Adam with bias correction c1 = 1/(1-b1^t), c2 = 1/(1-b2^t) (src/backends/cpu/optimizer.hpp)
 #include "common.glsl"
 #include "elementwise.glsl"
 layout(push_constant) uniform Push {

@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// dst = src, both strided (kernels/dense_concat.hpp concat_copy_forward)
+// dst = src, both strided (src/backends/cpu/dense_concat.hpp concat_copy_forward)
 #include "common.glsl"
 #include "elementwise.glsl"
 layout(push_constant) uniform Push { uint rows; uint cols; VIEW(s); VIEW(d); } pc;

@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// y = value   (kernels/elementwise.hpp fill)
+// y = value   (src/backends/cpu/elementwise.hpp fill)
 #include "common.glsl"
 #include "elementwise.glsl"
 layout(push_constant) uniform Push { uint rows; uint cols; VIEW(y); float value; } pc;
