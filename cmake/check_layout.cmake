@@ -15,7 +15,7 @@
 #              src/ops/, src/backends/ (cpu/: private but for backend_cpu.hpp and
 #              inference.hpp, the backend's entries; vulkan/: private)
 #   nn         include/gatcore/{nn,models}/ (but models/train.hpp, distill.hpp), src/nn/, src/models/
-#   train      include/gatcore/models/{train,distill}.hpp, optim.hpp, dist/, src/train/
+#   train      include/gatcore/models/{train,distill}.hpp, optim.hpp, dist/, train/, src/train/
 #   runtime    character layers rig, deform, features, inference, and runtime
 #              (include/gatcore/runtime.hpp, gatcore.h, src/runtime/)
 #   character  character layers io, data, eval, viz
@@ -80,7 +80,7 @@ function(_layer_of path out)
     set(_l loose)
   elseif(path MATCHES "^src/character/")
     set(_l loose)
-  elseif(path MATCHES "^(include/)?gatcore/(models/train\\.hpp|models/distill\\.hpp|optim\\.hpp|dist/)")
+  elseif(path MATCHES "^(include/)?gatcore/(models/train\\.hpp|models/distill\\.hpp|optim\\.hpp|dist/|train/)")
     set(_l train)
   elseif(path MATCHES "^src/train/")
     set(_l train)
