@@ -14,14 +14,14 @@
 #include "bench/bench_util.hpp"
 #include "gatcore/graph.hpp"
 #include "gatcore/tensor.hpp"
-#include "kernels/aggregation.hpp"
-#include "kernels/attention_projection.hpp"
-#include "kernels/dense_concat.hpp"
-#include "kernels/edge_softmax.hpp"
-#include "kernels/gat_fused.hpp"
-#include "kernels/gemm.hpp"
-#include "kernels/gemm_prepacked.hpp"
-#include "kernels/pooling.hpp"
+#include "src/backends/cpu/aggregation.hpp"
+#include "src/backends/cpu/attention_projection.hpp"
+#include "src/backends/cpu/dense_concat.hpp"
+#include "src/backends/cpu/edge_softmax.hpp"
+#include "src/backends/cpu/gat_fused.hpp"
+#include "src/backends/cpu/gemm.hpp"
+#include "src/backends/cpu/inference.hpp"
+#include "src/backends/cpu/pooling.hpp"
 
 namespace {
 

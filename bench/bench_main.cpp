@@ -11,7 +11,7 @@
 
 #include "bench/bench_models.hpp"
 #include "bench/bench_util.hpp"
-#include "kernels/simd.hpp"
+#include "src/backends/cpu/simd.hpp"
 
 int main(int argc, char** argv) {
   // Child mode of model_peak_rss: nothing but one training workload.

@@ -74,7 +74,7 @@ RuntimeCase make_case(const std::string& which, std::int64_t vertices, Precision
   for (const auto& b : bones) joined += (joined.empty() ? "" : ",") + b;
   const auto path = std::filesystem::temp_directory_path() /
                     ("gatbench_runtime_" + which + "_" + std::to_string(::getpid()) + ".gcm");
-  models::save_checkpoint(path.string(), *m, norm, nullptr,
+  models::save_checkpoint(path.string(), *m, norm,
                           {{"features", "densegats"}, {"skeleton", joined}, {"distortion_scales", "1,4,16"}});
   c.d = std::make_unique<runtime::Deformer>(
       runtime::Deformer::load(path.string(), runtime::DeviceChoice::cpu, precision));

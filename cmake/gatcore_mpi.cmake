@@ -1,5 +1,5 @@
-# Data-parallel training over MPI (src/dist/mpi_communicator.cpp), included by
-# the top-level CMakeLists.txt after the gatcore target exists.
+# Data-parallel training over MPI (src/train/dist/mpi_communicator.cpp), included by
+# the top-level CMakeLists.txt after the gatcore_train target exists.
 #
 # GATCORE_MPI=AUTO builds it when CMake finds MPI (Debian: libopenmpi-dev),
 # ON requires it, OFF skips it. Without it the library is the same except
@@ -22,9 +22,9 @@ if(NOT _gatcore_mpi_mode STREQUAL "OFF")
 endif()
 if(GATCORE_HAVE_MPI)
   message(STATUS "gatcore: MPI enabled (${MPIEXEC_EXECUTABLE})")
-  target_sources(gatcore PRIVATE ${PROJECT_SOURCE_DIR}/src/dist/mpi_communicator.cpp)
-  target_link_libraries(gatcore PRIVATE MPI::MPI_CXX)
-  target_compile_definitions(gatcore PRIVATE GATCORE_HAS_MPI)
+  target_sources(gatcore_train PRIVATE ${PROJECT_SOURCE_DIR}/src/train/dist/mpi_communicator.cpp)
+  target_link_libraries(gatcore_train PRIVATE MPI::MPI_CXX)
+  target_compile_definitions(gatcore_train PRIVATE GATCORE_HAS_MPI)
   if(NOT BUILD_SHARED_LIBS)
     set(GATCORE_CONFIG_FIND_MPI ON)  # a static gatcore's consumers link MPI too
   endif()

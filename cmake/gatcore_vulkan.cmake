@@ -1,5 +1,5 @@
-# The Vulkan compute backend (src/vulkan/, shaders/), included by the top-level
-# CMakeLists.txt after the gatcore target exists.
+# The Vulkan compute backend (src/backends/vulkan/ with its shaders/), included by the top-level
+# CMakeLists.txt after the gatcore_core target exists.
 #
 # GATCORE_VULKAN=AUTO builds it when the Vulkan headers/loader and
 # glslangValidator are found, ON requires them, OFF skips it. Every
@@ -25,8 +25,9 @@ endif()
 
 if(GATCORE_HAVE_VULKAN)
   message(STATUS "gatcore: Vulkan backend enabled (${GATCORE_GLSLANG_VALIDATOR})")
-  file(GLOB _gatcore_vk_sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/vulkan/*.cpp)
-  file(GLOB _gatcore_shaders CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/shaders/*.comp)
+  file(GLOB _gatcore_vk_sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/backends/vulkan/*.cpp)
+  list(FILTER _gatcore_vk_sources EXCLUDE REGEX "/vulkan_stub\\.cpp$")
+  file(GLOB _gatcore_shaders CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/backends/vulkan/shaders/*.comp)
   set(_spv_dir ${PROJECT_BINARY_DIR}/shaders)
   file(MAKE_DIRECTORY ${_spv_dir})
   set(_incs "")
@@ -46,7 +47,7 @@ if(GATCORE_HAVE_VULKAN)
       add_custom_command(
         OUTPUT ${_out}
         COMMAND ${GATCORE_GLSLANG_VALIDATOR} -V --target-env vulkan1.1 ${_defs}
-                -I${PROJECT_SOURCE_DIR}/shaders --vn gatcore_spv_${_name} --depfile ${_spv_dir}/${_name}.d
+                -I${PROJECT_SOURCE_DIR}/src/backends/vulkan/shaders --vn gatcore_spv_${_name} --depfile ${_spv_dir}/${_name}.d
                 -o ${_out} ${_shader}
         DEPENDS ${_shader}
         DEPFILE ${_spv_dir}/${_name}.d
@@ -59,13 +60,13 @@ if(GATCORE_HAVE_VULKAN)
   endforeach()
   set(GATCORE_VK_SHADER_INCLUDES "${_gatcore_vk_includes}")
   set(GATCORE_VK_SHADER_TABLE "${_gatcore_vk_table}")
-  configure_file(${PROJECT_SOURCE_DIR}/src/vulkan/shaders_embedded.cpp.in ${_spv_dir}/shaders_embedded.cpp @ONLY)
+  configure_file(${PROJECT_SOURCE_DIR}/src/backends/vulkan/shaders_embedded.cpp.in ${_spv_dir}/shaders_embedded.cpp @ONLY)
   set_source_files_properties(${_spv_dir}/shaders_embedded.cpp PROPERTIES OBJECT_DEPENDS "${_incs}")
-  target_sources(gatcore PRIVATE ${_gatcore_vk_sources} ${_spv_dir}/shaders_embedded.cpp ${_incs})
-  target_include_directories(gatcore PRIVATE ${PROJECT_BINARY_DIR})
-  target_link_libraries(gatcore PRIVATE Vulkan::Vulkan)
-  target_compile_definitions(gatcore PUBLIC GATCORE_HAS_VULKAN=1)
-  get_target_property(_gatcore_type gatcore TYPE)
+  target_sources(gatcore_core PRIVATE ${_gatcore_vk_sources} ${_spv_dir}/shaders_embedded.cpp ${_incs})
+  target_include_directories(gatcore_core PRIVATE ${PROJECT_BINARY_DIR})
+  target_link_libraries(gatcore_core PRIVATE Vulkan::Vulkan)
+  target_compile_definitions(gatcore_core PUBLIC GATCORE_HAS_VULKAN=1)
+  get_target_property(_gatcore_type gatcore_core TYPE)
   if(_gatcore_type STREQUAL "STATIC_LIBRARY")
     set(GATCORE_CONFIG_FIND_VULKAN ON)
   endif()

@@ -88,7 +88,7 @@ std::string nearest_checkpoint(int K) {
   const auto dir = std::filesystem::temp_directory_path() / "gatcore_nearest_joints_tests";
   std::filesystem::create_directories(dir);
   const std::string path = (dir / ("nearest" + std::to_string(K) + ".gcm")).string();
-  models::save_checkpoint(path, *m, norm, nullptr,
+  models::save_checkpoint(path, *m, norm,
                           {{"features", "densegats"},
                            {"skeleton", "training_bone_a,training_bone_b"},
                            {"distortion_scales", "1,4"},

@@ -10,6 +10,7 @@
 
 #include "checkpoint_v1.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
 #include "model_fixtures.hpp"
 
 using namespace gatcore;

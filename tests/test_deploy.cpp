@@ -9,8 +9,8 @@
 
 #include "gatcore/models/deploy.hpp"
 #include "gatcore/models/train.hpp"
-#include "kernels/gat_epilogue.hpp"
-#include "kernels/simd.hpp"
+#include "src/backends/cpu/inference.hpp"
+#include "src/backends/cpu/simd.hpp"
 #include "model_fixtures.hpp"
 
 using namespace gatcore;

@@ -12,7 +12,7 @@
 #include "gatcore/dist/data_parallel.hpp"
 #include "gatcore/models/train.hpp"
 #include "gatcore/nn/dropout.hpp"
-#include "kernels/batchnorm.hpp"
+#include "src/backends/cpu/batchnorm.hpp"
 #include "model_fixtures.hpp"
 #include "test_util.hpp"
 

@@ -13,12 +13,12 @@
 #include <string>
 #include <vector>
 
-#include "kernels/aggregation.hpp"
-#include "kernels/attention_projection.hpp"
-#include "kernels/attn_simd.hpp"
-#include "kernels/edge_softmax.hpp"
-#include "kernels/gat_fused.hpp"
-#include "kernels/simd.hpp"
+#include "src/backends/cpu/aggregation.hpp"
+#include "src/backends/cpu/attention_projection.hpp"
+#include "src/backends/cpu/attn_simd.hpp"
+#include "src/backends/cpu/edge_softmax.hpp"
+#include "src/backends/cpu/gat_fused.hpp"
+#include "src/backends/cpu/simd.hpp"
 #include "mesh_fixtures.hpp"
 #include "reference/attention_reference.hpp"
 #include "test_util.hpp"

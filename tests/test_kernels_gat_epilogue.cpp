@@ -1,4 +1,4 @@
-// gat_epilogue / gat_epilogue_bf16 (kernels/gat_epilogue.hpp) against the
+// gat_epilogue / gat_epilogue_bf16 (src/backends/cpu/inference.hpp) against the
 // composition they replace on the deploy path: the attention and self
 // streams copied side by side, add_row_bias on the self columns,
 // activation_forward tanhshrink, batchnorm_affine_forward (and bf16_pairs).
@@ -10,12 +10,10 @@
 #include <cstring>
 
 #include "gatcore/precision.hpp"
-#include "kernels/batchnorm.hpp"
-#include "kernels/elementwise.hpp"
-#include "kernels/gat_epilogue.hpp"
-#include "kernels/gat_fused.hpp"
-#include "kernels/gemm_prepacked.hpp"
-#include "kernels/simd.hpp"
+#include "src/backends/cpu/batchnorm.hpp"
+#include "src/backends/cpu/elementwise.hpp"
+#include "src/backends/cpu/gat_fused.hpp"
+#include "src/backends/cpu/simd.hpp"
 #include "reference/nn_reference.hpp"
 #include "test_util.hpp"
 

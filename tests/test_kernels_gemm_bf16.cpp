@@ -14,9 +14,9 @@
 #include <limits>
 #include <random>
 
-#include "kernels/elementwise.hpp"
-#include "kernels/gemm.hpp"
-#include "kernels/gemm_bf16.hpp"
+#include "src/backends/cpu/elementwise.hpp"
+#include "src/backends/cpu/gemm.hpp"
+#include "src/backends/cpu/gemm_bf16.hpp"
 #include "reference/bf16_reference.hpp"
 #include "reference/nn_reference.hpp"
 

@@ -1,4 +1,4 @@
-// The inference GEMM with pre-packed weights (kernels/gemm_prepacked.hpp):
+// The inference GEMM with pre-packed weights (src/backends/cpu/inference.hpp):
 // fp32 equals gemm() bitwise; bf16 (kernels/gemm_bf16.hpp) against a double
 // reference of the bf16-rounded operands, through the portable emulation on
 // every CPU and through the AVX512_BF16 kernel where the CPU has it; the
@@ -15,11 +15,11 @@
 #include <limits>
 #include <random>
 
-#include "kernels/elementwise.hpp"
-#include "kernels/gemm.hpp"
-#include "kernels/gemm_bf16.hpp"
-#include "kernels/gemm_prepacked.hpp"
-#include "kernels/simd.hpp"
+#include "src/backends/cpu/elementwise.hpp"
+#include "src/backends/cpu/gemm.hpp"
+#include "src/backends/cpu/gemm_bf16.hpp"
+#include "src/backends/cpu/inference.hpp"
+#include "src/backends/cpu/simd.hpp"
 #include "reference/bf16_reference.hpp"
 #include "reference/nn_reference.hpp"
 

@@ -9,13 +9,13 @@
 #include <limits>
 #include <vector>
 
-#include "kernels/batchnorm.hpp"
-#include "kernels/dense_concat.hpp"
-#include "kernels/elementwise.hpp"
-#include "kernels/gemm.hpp"
-#include "kernels/gemm_impl.hpp"
-#include "kernels/loss.hpp"
-#include "kernels/row_softmax.hpp"
+#include "src/backends/cpu/batchnorm.hpp"
+#include "src/backends/cpu/dense_concat.hpp"
+#include "src/backends/cpu/elementwise.hpp"
+#include "src/backends/cpu/gemm.hpp"
+#include "src/backends/cpu/gemm_impl.hpp"
+#include "src/backends/cpu/loss.hpp"
+#include "src/backends/cpu/row_softmax.hpp"
 #include "reference/nn_reference.hpp"
 
 using namespace gatcore;

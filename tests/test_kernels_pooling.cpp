@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "gatcore/graph.hpp"
-#include "kernels/pooling.hpp"
+#include "src/backends/cpu/pooling.hpp"
 #include "reference/nn_reference.hpp"
 
 using namespace gatcore;

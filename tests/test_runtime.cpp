@@ -25,6 +25,7 @@
 #include "gatcore/character/features/bone_candidates.hpp"
 #include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
 #include "gatcore/gatcore.h"
 #include "gatcore/runtime.hpp"
 #include "pose_fixtures.hpp"

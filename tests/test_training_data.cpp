@@ -11,6 +11,7 @@
 
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
 
 using namespace gatcore;
 using namespace gatcore::character;

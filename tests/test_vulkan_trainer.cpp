@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
 #include "model_fixtures.hpp"
 #include "vulkan_test_util.hpp"
 

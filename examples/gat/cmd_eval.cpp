@@ -22,6 +22,7 @@
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
 

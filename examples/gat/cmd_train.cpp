@@ -27,6 +27,7 @@
 #include "progress.hpp"
 #include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
 #include "gatcore/models/linear_skip.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"

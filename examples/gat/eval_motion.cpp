@@ -27,6 +27,7 @@
 #include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
 #include "gatcore/models/linear_skip.hpp"
 #include "progress.hpp"
 

@@ -14,10 +14,10 @@
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "gat_version.hpp"
+#include "gatcore/backend.hpp"
 #include "gatcore/dist/communicator.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/vulkan.hpp"
-#include "kernels/simd.hpp"
 #include "progress.hpp"
 
 namespace {
@@ -37,8 +37,8 @@ constexpr gat::Command kCommands[] = {
 
 std::string version_text() {
   std::string s = "gat (gatcore) " GATCORE_VERSION ", git " GAT_GIT_HASH "\n";
-  s += std::string("CPU kernels: SIMD ") + gatcore::cpu::simd_level_name(gatcore::cpu::simd_level()) +
-       " (the CPU supports " + gatcore::cpu::simd_level_name(gatcore::cpu::detected_simd_level()) + ")\n";
+  s += std::string("CPU kernels: SIMD ") + gatcore::cpu_simd_level_name() + " (the CPU supports " +
+       gatcore::cpu_detected_simd_level_name() + ")\n";
   if (!gatcore::vulkan::compiled()) return s + "Vulkan: not in this build\n";
   const auto devices = gatcore::vulkan::list_devices();
   if (devices.empty()) return s + "Vulkan: no device found\n";

@@ -4,7 +4,7 @@
 // runs wherever its tensors are. The CPU backend is always registered; a
 // Vulkan backend registers itself when built.
 //
-// Conventions (the same as kernels/*.hpp): gradient outputs are accumulated
+// Conventions (the same as src/backends/cpu/*.hpp): gradient outputs are accumulated
 // (+=) and may be undefined tensors meaning "not wanted"; forward outputs are
 // overwritten. Scalars (losses, sums) stay on the device as [1, 1] tensors.
 #include <cstdint>
@@ -81,7 +81,7 @@ class Backend {
                                                const Tensor& d_gamma, const Tensor& d_beta, const SumAcross& across);
 
   // BatchNorm (training) fused with the activation after it (identity, relu,
-  // leaky_relu; kernels/batchnorm.hpp batchnorm_act_*): backward recomputes
+  // leaky_relu; src/backends/cpu/batchnorm.hpp batchnorm_act_*): backward recomputes
   // the normalised value and the activation's sign from x and the saved
   // statistics instead of keeping them. save_mean / save_invstd [1, C] are
   // batchnorm_train_forward's; save_affine [2, C] is the backend's own. apply
@@ -111,11 +111,11 @@ class Backend {
   virtual void kl_div_backward(const Tensor& pred, const Tensor& target, float eps, const Tensor& d_out,
                                const Tensor& d_pred) = 0;
 
-  // Optimiser (kernels/optimizer.hpp).
+  // Optimiser (src/backends/cpu/optimizer.hpp).
   virtual void adam_update(const Tensor& param, const Tensor& grad, const Tensor& m, const Tensor& v, float lr,
                            float beta1, float beta2, float eps, float weight_decay, long step) = 0;
 
-  // Graph attention (see kernels/attention_projection.hpp, edge_softmax.hpp,
+  // Graph attention (see src/backends/cpu/attention_projection.hpp, edge_softmax.hpp,
   // aggregation.hpp, gat_fused.hpp).
   virtual void attention_projection_forward(const Tensor& z, const Tensor& a_l, const Tensor& a_r,
                                             const Tensor& el, const Tensor& er) = 0;
@@ -145,7 +145,7 @@ class Backend {
   virtual void gat_fused_dot_backward(const CsrGraph& g, const Tensor& z, int heads, float scale,
                                       const Tensor& alpha, const Tensor& d_out, const Tensor& d_z) = 0;
 
-  // Pooling (kernels/pooling.hpp).
+  // Pooling (src/backends/cpu/pooling.hpp).
   virtual void segment_max_forward(const Tensor& x, std::span<const std::int64_t> seg_ptr, const Tensor& out,
                                    const Tensor& argmax) = 0;
   virtual void segment_max_backward(const Tensor& d_out, const Tensor& argmax, const Tensor& d_x) = 0;
@@ -167,5 +167,10 @@ void unregister_backend(Device d);
 
 // Moves / copies a tensor to another device (a no-op view when already there).
 Tensor to(const Tensor& t, Device d);
+
+// The SIMD path the CPU kernels take now ("scalar", "avx2", "avx512";
+// GATCORE_SIMD may force a lower one) and the best this CPU supports.
+const char* cpu_simd_level_name();
+const char* cpu_detected_simd_level_name();
 
 }  // namespace gatcore

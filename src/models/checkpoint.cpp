@@ -251,9 +251,7 @@ CheckpointFile parse_checkpoint(std::string_view bytes, const std::string& path)
 
 CheckpointFile read_checkpoint_file(const std::string& path) { return parse_checkpoint(read_bytes(path), path); }
 
-namespace {
-
-std::string float_str(double v) {
+std::string metadata_text(double v) {
   std::ostringstream os;
   os.precision(17);
   os << v;
@@ -263,8 +261,8 @@ std::string float_str(double v) {
 // Metadata numbers, strictly: the whole string, finite, within [lo, hi];
 // otherwise an error naming the key and the value (never std::stof's bare
 // "stof", never a NaN learning rate resumed into an all-NaN model).
-double meta_number(const std::map<std::string, std::string>& meta, const std::string& key, double lo, double hi,
-                   const std::string& path) {
+double metadata_number(const std::map<std::string, std::string>& meta, const std::string& key, double lo, double hi,
+                       const std::string& path) {
   const auto it = meta.find(key);
   if (it == meta.end()) fail(path, "metadata '" + key + "' is missing");
   const std::string& s = it->second;
@@ -276,35 +274,33 @@ double meta_number(const std::map<std::string, std::string>& meta, const std::st
   return v;
 }
 
-std::int64_t meta_integer(const std::map<std::string, std::string>& meta, const std::string& key, std::int64_t lo,
-                          std::int64_t hi, const std::string& path) {
-  const double v = meta_number(meta, key, double(lo), double(hi), path);
+std::int64_t metadata_integer(const std::map<std::string, std::string>& meta, const std::string& key, std::int64_t lo,
+                              std::int64_t hi, const std::string& path) {
+  const double v = metadata_number(meta, key, double(lo), double(hi), path);
   if (v != std::floor(v)) fail(path, detail::cat("metadata '", key, "' = '", meta.at(key), "' is not an integer"));
   return std::int64_t(v);
 }
 
-bool meta_flag(const std::map<std::string, std::string>& meta, const std::string& key, const std::string& path) {
+bool metadata_flag(const std::map<std::string, std::string>& meta, const std::string& key, const std::string& path) {
   const std::string& s = meta.at(key);
   if (s != "0" && s != "1") fail(path, "metadata '" + key + "' = '" + s + "' is not 0 or 1");
   return s == "1";
 }
 
-std::string rng_str(nn::Rng& r) {
+std::string metadata_text(nn::Rng& r) {
   std::ostringstream os;
   os << r.engine();
   return os.str();
 }
 
-}  // namespace
-
-void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm, const Trainer* trainer,
-                     const std::map<std::string, std::string>& extra) {
+CheckpointFile model_checkpoint(const Model& model, const Normaliser& norm,
+                                const std::map<std::string, std::string>& extra, const std::string& path) {
   if (model.folded())
     fail(path, "the model's BatchNorms were folded for inference; save the unfolded model (load it again)");
   CheckpointFile f;
   f.metadata = extra;
   f.metadata["config"] = model.config().to_text();
-  f.metadata["target_scale"] = float_str(norm.target_scale);
+  f.metadata["target_scale"] = metadata_text(norm.target_scale);
   // Downloaded first when the model lives on a device.
   for (const auto& p : model.registry().params) f.tensors.emplace_back(p.name, to(p.var.value(), Device::cpu));
   for (const auto& b : model.registry().buffers) f.tensors.emplace_back(b.name, to(b.tensor, Device::cpu));
@@ -312,24 +308,13 @@ void save_checkpoint(const std::string& path, const Model& model, const Normalis
     f.tensors.emplace_back("norm.mean", norm.mean);
     f.tensors.emplace_back("norm.inv_std", norm.inv_std);
   }
-  f.metadata["model_rng"] = rng_str(const_cast<Model&>(model).rng());
-  if (trainer) {
-    auto& t = const_cast<Trainer&>(*trainer);
-    const auto& params = model.registry().params;
-    for (std::size_t k = 0; k < params.size(); ++k) {
-      f.tensors.emplace_back("optim.m." + params[k].name, to(t.optimiser().first_moments()[k], Device::cpu));
-      f.tensors.emplace_back("optim.v." + params[k].name, to(t.optimiser().second_moments()[k], Device::cpu));
-    }
-    f.metadata["epoch"] = std::to_string(t.epoch());
-    f.metadata["lr"] = float_str(t.optimiser().lr());
-    f.metadata["adam_steps"] = std::to_string(t.optimiser().steps());
-    f.metadata["rng"] = rng_str(t.rng());
-    f.metadata["plateau_best"] = float_str(t.plateau().best);
-    f.metadata["plateau_has_best"] = t.plateau().has_best ? "1" : "0";
-    f.metadata["plateau_bad_epochs"] = std::to_string(t.plateau().bad_epochs);
-    f.metadata["plateau_on_validation"] = t.plateau().on_validation ? "1" : "0";
-  }
-  write_checkpoint_file(path, f);
+  f.metadata["model_rng"] = metadata_text(const_cast<Model&>(model).rng());
+  return f;
+}
+
+void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm,
+                     const std::map<std::string, std::string>& extra) {
+  write_checkpoint_file(path, model_checkpoint(model, norm, extra, path));
 }
 
 namespace {
@@ -377,7 +362,7 @@ LoadedModel load_checkpoint_file(CheckpointFile file, const std::string& path) {
     out.norm.inv_std = *inv;
   }
   if (f.metadata.count("target_scale"))
-    out.norm.target_scale = float(meta_number(f.metadata, "target_scale", 1e-30, 1e30, path));
+    out.norm.target_scale = float(metadata_number(f.metadata, "target_scale", 1e-30, 1e30, path));
   if (auto r = f.metadata.find("model_rng"); r != f.metadata.end()) {
     std::istringstream is(r->second);
     is >> m->rng().engine();
@@ -403,39 +388,6 @@ int upgrade_checkpoint(const std::string& in, const std::string& out) {
   int version = 0;
   write_checkpoint_file(out, upgrade_checkpoint_bytes(read_bytes(in), in, &version));
   return version;
-}
-
-void restore_training_state(const CheckpointFile& f, Trainer& t, const std::string& path) {
-  auto meta = [&](const char* k) {
-    auto it = f.metadata.find(k);
-    if (it == f.metadata.end()) fail(path, std::string("no training state ('") + k + "' missing): cannot resume");
-    return it->second;
-  };
-  const auto& params = t.model().registry().params;
-  for (std::size_t k = 0; k < params.size(); ++k) {
-    for (int mv = 0; mv < 2; ++mv) {
-      const std::string name = (mv ? "optim.v." : "optim.m.") + params[k].name;
-      const Tensor* src = f.find(name);
-      if (!src) fail(path, "missing optimiser tensor '" + name + "': cannot resume");
-      Tensor& dst = mv ? t.optimiser().second_moments()[k] : t.optimiser().first_moments()[k];
-      if (!src->same_shape(dst)) fail(path, "shape mismatch for '" + name + "'");
-      if (dst.device() == Device::cpu) dst.copy_from_(*src);
-      else backend(dst.device()).copy(to(*src, dst.device()), dst);  // uploaded explicitly
-    }
-  }
-  for (const char* k : {"epoch", "lr", "adam_steps", "plateau_best", "plateau_has_best", "plateau_bad_epochs"}) meta(k);
-  const auto& m = f.metadata;
-  t.set_epoch(int(meta_integer(m, "epoch", 0, std::numeric_limits<int>::max(), path)));
-  t.optimiser().set_lr(float(meta_number(m, "lr", 0.0, 1e6, path)));
-  t.optimiser().set_steps(meta_integer(m, "adam_steps", 0, std::int64_t(1) << 52, path));
-  t.plateau().best = float(meta_number(m, "plateau_best", -3e38, 3e38, path));
-  t.plateau().has_best = meta_flag(m, "plateau_has_best", path);
-  t.plateau().bad_epochs = int(meta_integer(m, "plateau_bad_epochs", 0, std::numeric_limits<int>::max(), path));
-  // Absent in checkpoints written before the key existed.
-  t.plateau().on_validation = m.count("plateau_on_validation") && meta_flag(m, "plateau_on_validation", path);
-  std::istringstream is(meta("rng"));
-  is >> t.rng().engine();
-  if (!is) fail(path, "corrupted rng state");
 }
 
 }  // namespace gatcore::models

@@ -11,11 +11,7 @@
 
 #include "gatcore/backend.hpp"
 #include "gatcore/vulkan.hpp"
-#include "kernels/attention_projection.hpp"
-#include "kernels/batchnorm.hpp"
-#include "kernels/elementwise.hpp"
-#include "kernels/gat_epilogue.hpp"
-#include "kernels/gemm_prepacked.hpp"
+#include "src/backends/cpu/inference.hpp"
 
 namespace gatcore::models {
 

@@ -11,6 +11,7 @@
 
 #include "gatcore/dist/communicator.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/train.hpp"
 #include "model_fixtures.hpp"
 
 using namespace gatcore;

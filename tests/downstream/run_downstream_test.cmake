@@ -86,12 +86,17 @@ message(STATUS "building the consumer")
 run_step("build of the downstream project" ${CMAKE_COMMAND} --build "${project_bin}" --config "${build_type}")
 
 # 4. Run it and check what it prints.
-find_program(app NAMES app PATHS "${project_bin}" "${project_bin}/${build_type}" NO_DEFAULT_PATH)
-if(NOT app)
-  message(FATAL_ERROR "downstream test: the build produced no app executable in ${project_bin}")
-endif()
-run_step("running ${app}" "${app}")
-message(STATUS "app printed:\n${step_output}")
+# Runs the consumer's program `name`; its output goes to step_output.
+function(run_program name)
+  find_program(_exe_${name} NAMES ${name} PATHS "${project_bin}" "${project_bin}/${build_type}" NO_DEFAULT_PATH)
+  if(NOT _exe_${name})
+    message(FATAL_ERROR "downstream test: the build produced no ${name} executable in ${project_bin}")
+  endif()
+  run_step("running ${_exe_${name}}" "${_exe_${name}}")
+  message(STATUS "${name} printed:\n${step_output}")
+  set(step_output "${step_output}" PARENT_SCOPE)
+endfunction()
+run_program(app)
 set(expected
   "nodes=9 edges=41 max_degree=7 symmetric=1 self_loops=1 row4=0,1,3,4,5,7,8"
   "tensor=[2, 3] slice=[2, 2] slice_sum=16"
@@ -102,4 +107,10 @@ foreach(line IN LISTS expected)
     message(FATAL_ERROR "downstream test: app output lacks the line\n  ${line}\nit printed:\n${step_output}")
   endif()
 endforeach()
+
+# 5. The C API engine, linked against gatcore::runtime alone.
+run_program(engine)
+if(NOT step_output MATCHES "engine: version=[0-9.]+ load=GATCORE_ERROR_IO deformer=null names_file=1")
+  message(FATAL_ERROR "downstream test: engine output is not the expected line; it printed:\n${step_output}")
+endif()
 message(STATUS "downstream test passed")

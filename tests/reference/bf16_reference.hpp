@@ -2,7 +2,7 @@
 // Reference side of the bf16 product tests: a tensor's values rounded to
 // bf16 (bf16_round, the kernels' rounding) as a double matrix, so that a
 // double product of the rounded operands leaves only the fp32 summation error.
-#include "kernels/gemm_bf16.hpp"
+#include "src/backends/cpu/gemm_bf16.hpp"
 #include "reference/nn_reference.hpp"
 
 namespace gatcore::ref {

@@ -20,7 +20,7 @@
 #include "gatcore/activation.hpp"
 #include "gatcore/graph.hpp"
 #include "gatcore/tensor.hpp"
-#include "kernels/simd.hpp"
+#include "src/backends/cpu/simd.hpp"
 
 namespace gatcore::ref {
 

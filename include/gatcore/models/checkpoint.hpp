@@ -37,7 +37,10 @@
 #include <string_view>
 #include <vector>
 
-#include "gatcore/models/train.hpp"
+#include "gatcore/error.hpp"
+#include "gatcore/models/model.hpp"
+#include "gatcore/models/sample.hpp"
+#include "gatcore/nn/init.hpp"
 
 namespace gatcore::models {
 
@@ -58,13 +61,16 @@ CheckpointFile read_checkpoint_file(const std::string& path);
 std::string checkpoint_bytes(const CheckpointFile& f);
 CheckpointFile parse_checkpoint(std::string_view bytes, const std::string& path);
 
-// Saves the model (parameters + buffers), the normaliser and, if `trainer`
-// is given, the state to resume training. The model may live on any device
-// (tensors are downloaded before writing). load_checkpoint returns a CPU
-// model: Model::to(d) it before building the Trainer that
-// restore_training_state fills (the Adam moments are uploaded).
+// Saves the model (parameters + buffers) and the normaliser. The model may
+// live on any device (tensors are downloaded before writing). load_checkpoint
+// returns a CPU model. The trainer's state (to resume training) is saved by
+// train.hpp's save_checkpoint, which adds it to model_checkpoint's contents.
 void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm,
-                     const Trainer* trainer = nullptr, const std::map<std::string, std::string>& extra = {});
+                     const std::map<std::string, std::string>& extra = {});
+// What save_checkpoint writes, in memory (`path` only names the file in errors).
+CheckpointFile model_checkpoint(const Model& model, const Normaliser& norm,
+                                const std::map<std::string, std::string>& extra = {},
+                                const std::string& path = "checkpoint");
 
 struct LoadedModel {
   std::unique_ptr<Model> model;
@@ -85,8 +91,17 @@ int upgrade_checkpoint(const std::string& in, const std::string& out);
 // write_checkpoint_file); `version` (optional) receives the version read.
 CheckpointFile upgrade_checkpoint_bytes(std::string_view bytes, const std::string& path, int* version = nullptr);
 
-// Restores optimiser moments, epoch, lr, RNG and scheduler state saved with
-// the trainer (the trainer must wrap the model loaded from the same file).
-void restore_training_state(const CheckpointFile& f, Trainer& trainer, const std::string& path = "checkpoint");
+// Metadata values, strictly: the whole string, finite, within [lo, hi] (an
+// integer; "0" or "1"); otherwise CheckpointError naming `path`, the key and
+// the value (never a NaN learning rate resumed into an all-NaN model).
+double metadata_number(const std::map<std::string, std::string>& meta, const std::string& key, double lo, double hi,
+                       const std::string& path);
+std::int64_t metadata_integer(const std::map<std::string, std::string>& meta, const std::string& key, std::int64_t lo,
+                              std::int64_t hi, const std::string& path);
+bool metadata_flag(const std::map<std::string, std::string>& meta, const std::string& key, const std::string& path);
+// How numbers and RNG states are written into metadata (17 digits; the
+// engine's stream form), what the readers above take back exactly.
+std::string metadata_text(double v);
+std::string metadata_text(nn::Rng& rng);
 
 }  // namespace gatcore::models

@@ -39,7 +39,7 @@ bool deployable(const ModelConfig& cfg);
 // Folds `model`'s BatchNorms (the model is left folded: inference only) and
 // copies its weights to `device` (Device::cpu or an initialised Vulkan
 // backend); on the CPU the weights are also packed once for the products
-// (kernels/gemm_prepacked.hpp) in `precision`. Throws InvalidArgument for
+// (src/backends/cpu/inference.hpp) in `precision`. Throws InvalidArgument for
 // models without a deploy path, and for bf16 off the CPU or on a CPU without
 // AVX512_BF16 (bf16_supported()).
 std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normaliser& norm,

@@ -1,5 +1,7 @@
 #pragma once
-// Training: vertex sampling, batching, Adam with the papers' schedules.
+// Training (the train layer): vertex sampling, the Trainer, Adam with the
+// papers' schedules, and the training state a checkpoint carries. Batching and
+// inference are models/predict.hpp's.
 //
 // Determinism: given the same seed, samples and options, training is
 // bit-reproducible on one machine and build (seeded mt19937_64 with our own
@@ -15,7 +17,9 @@
 #include <vector>
 
 #include "gatcore/dist/communicator.hpp"
+#include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/model.hpp"
+#include "gatcore/models/predict.hpp"
 #include "gatcore/models/sample.hpp"
 #include "gatcore/optim.hpp"
 #include "gatcore/precision.hpp"
@@ -92,21 +96,6 @@ Precision training_precision(Precision requested, Device d, std::string* why = n
 
 // Vertices of `n` chosen for one training sample.
 std::vector<std::int32_t> sample_vertices(std::int64_t n, Sampling s, std::int64_t k, nn::Rng& rng);
-
-// Neighbour lists by breadth-first hop distance (ties by vertex id), the
-// vertex itself first, at most k per vertex.
-std::vector<std::vector<std::int32_t>> hop_neighbours(const CsrGraph& g, int k);
-
-// One block-diagonal batch of the given samples restricted to the given
-// vertex selections (empty selection = all vertices), with normalised
-// features, targets, bone masks, log priors (all samples or none) and the
-// neighbour graphs of `pool_sizes`.
-Batch make_batch(const std::vector<const Sample*>& samples, const std::vector<std::vector<std::int32_t>>& selections,
-                 const Normaliser& norm, const std::vector<int>& pool_sizes);
-
-// Moves the batch's features, target, mask and prior to `d` (graphs stay: backends
-// upload them themselves).
-void to_device(Batch& b, Device d);
 
 struct EpochStats {
   int epoch = 0;
@@ -219,8 +208,15 @@ class Trainer {
   int epoch_ = 0;
 };
 
-// Predictions on one full sample in eval mode, de-normalised (displacements
-// divided by the target scale; weights top-κ renormalised if top_k > 0).
-Tensor predict(Model& model, const Sample& s, const Normaliser& norm, int top_k = 0);
+// save_checkpoint (checkpoint.hpp) with, when `trainer` is given, the state
+// to resume training: Adam moments ("optim.m.<param>", "optim.v.<param>"),
+// epoch, lr, adam_steps, rng and the plateau scheduler's state. The model may
+// live on any device (tensors are downloaded before writing).
+void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm, const Trainer* trainer,
+                     const std::map<std::string, std::string>& extra = {});
+
+// Restores optimiser moments, epoch, lr, RNG and scheduler state saved with
+// the trainer (the trainer must wrap the model loaded from the same file).
+void restore_training_state(const CheckpointFile& f, Trainer& trainer, const std::string& path = "checkpoint");
 
 }  // namespace gatcore::models

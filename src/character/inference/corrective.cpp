@@ -6,7 +6,7 @@
 #include "gatcore/character/features/frame_features.hpp"
 #include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/error.hpp"
-#include "gatcore/models/train.hpp"
+#include "gatcore/models/predict.hpp"
 
 namespace gatcore::character {
 

@@ -8,7 +8,7 @@
 #include "gatcore/character/features/features.hpp"
 #include "gatcore/character/features/frame_features.hpp"
 #include "gatcore/error.hpp"
-#include "gatcore/models/train.hpp"
+#include "gatcore/models/predict.hpp"
 
 namespace gatcore::character {
 
