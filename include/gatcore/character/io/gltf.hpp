@@ -44,7 +44,9 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
 // new glTF file: one mesh node with the welded mesh (POSITION, NORMAL,
 // JOINTS_n / WEIGHTS_n), one node per joint with its rest transform (a root's
 // non-identity root_parent becomes a parent node), one skin with the inverse
-// bind matrices. load_gltf reads it back as the same character. Atomic.
+// bind matrices; each of ch.clips as an animation (a linear key per frame,
+// every joint's translation and rotation). load_gltf reads it back as the
+// same character. Atomic.
 void save_gltf_character(const Character& ch, const std::string& out_path);
 
 }  // namespace gatcore::character
