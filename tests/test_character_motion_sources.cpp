@@ -136,6 +136,17 @@ rigfix::Spec opaque() {
   return s;
 }
 
+// MotionBuilder's Biovision export and similar: LeftUpArm, LeftLowArm, LeftUpLeg, LeftLowLeg.
+rigfix::Spec generic_named() {
+  rigfix::Spec s{"generic", "Generic bone names", "Left", "Right", false, rigfix::Axes::identity, 1.0f, "", {}};
+  s.joints = {{"Hips", "", "pelvis"},          {"Chest", "Hips", "spine:1/2"},        {"Chest1", "Chest", "spine:2/2"},
+              {"Neck", "Chest1", "neck:1/1"},  {"Head", "Neck", "head"},              {"<Collar", "Chest1", "clavicle<"},
+              {"<UpArm", "<Collar", "upperarm<"}, {"<LowArm", "<UpArm", "forearm<"},  {"<Hand", "<LowArm", "hand<"},
+              {"<UpLeg", "Hips", "thigh<"},    {"<LowLeg", "<UpLeg", "shin<"},        {"<Foot", "<LowLeg", "foot<"},
+              {"<ToeBase", "<Foot", "toe<"}};
+  return s;
+}
+
 // Left knee bent 45 degrees, left arm raised 60 degrees, right thigh 30
 // forward, right elbow 60; the body moved.
 std::vector<rigfix::PartPose> pose() {
@@ -327,7 +338,7 @@ float angle_deg(const Vec3& a, const Vec3& b) {
 // Every source convention, as files of every kind.
 std::vector<Source> sources(const std::vector<rigfix::PartPose>& poses) {
   std::vector<Source> out;
-  for (rigfix::Spec spec : {spec_named("cmu"), joint_named(), asf_named(), max_named(), opaque()}) {
+  for (rigfix::Spec spec : {spec_named("cmu"), joint_named(), asf_named(), max_named(), opaque(), generic_named()}) {
     const std::string id = spec.id;
     out.push_back({id + " BVH Y-up m", load_bvh(write(id + "_m.bvh", rigfix::bvh(spec, poses)))});
     out.push_back({id + " BVH Z-up m", z_up(out.back().motion)});
@@ -353,7 +364,7 @@ std::vector<Source> sources(const std::vector<rigfix::PartPose>& poses) {
 }  // namespace
 
 TEST_CASE("joint-named, ASF-named, 3ds Max-named and opaque rigs map by meaning", "[character][rig][motion]") {
-  for (const rigfix::Spec& spec : {joint_named(), asf_named(), max_named(), opaque()}) {
+  for (const rigfix::Spec& spec : {joint_named(), asf_named(), max_named(), opaque(), generic_named()}) {
     const Motion m = load_bvh(write(spec.id + "_map.bvh", rigfix::bvh(spec, pose())));
     const MotionRig r = map_motion_rig(m.skeleton);
     INFO(spec.id << "\n" << describe_rig(m.skeleton, r.mapping));

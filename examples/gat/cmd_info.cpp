@@ -253,7 +253,7 @@ static int run_info(const std::string& path, const std::vector<std::string>& ali
   Activity doing("reading " + path);
   BoneAliases aliases;  // --alias: the mapping the retargeter would use with it
   for (const auto& al : alias_specs) add_alias(aliases, al);
-  if (ends_with(path, ".bvh") || ends_with(path, ".amc") || path.find(".asf:") != std::string::npos ||
+  if (ends_with(path, ".bvh") || ends_with(path, ".amc") || ends_with(path, ".asf") || path.find(".asf:") != std::string::npos ||
       path.find('#') != std::string::npos) {
     print_motion(load_motion(path), aliases);
     return 0;

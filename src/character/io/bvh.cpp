@@ -234,8 +234,11 @@ Motion parse_bvh(std::string_view text, const std::string& path, const WarningFn
   std::vector<double> v(static_cast<std::size_t>(values_per_frame));
   constexpr double kDeg = 3.14159265358979323846 / 180.0;
   const int frames_line = lx.line;
+  // A skeleton without channels: the count is all there is.
+  if (v.empty())
+    for (std::int64_t f = 0; f < frames; ++f) m.clip.frames.push_back(Pose{s.rest_local});
   // Whole frames until the numbers end (the Frames: count is only a hint).
-  for (std::int64_t f = 0; !lx.at_end(); ++f) {
+  for (std::int64_t f = 0; !v.empty() && !lx.at_end(); ++f) {
     if (f >= 10'000'000) lx.fail("more than 10000000 frames");
     for (std::size_t k = 0; k < v.size(); ++k) {
       if (lx.at_end()) {
@@ -273,8 +276,8 @@ Motion parse_bvh(std::string_view text, const std::string& path, const WarningFn
       const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
       p.local[j].rotation = {float(q[0] / n), float(q[1] / n), float(q[2] / n), float(q[3] / n)};
     }
-    if (v.empty()) break;  // no channels: one frame of the rest pose
   }
+  if (v.empty() && !lx.at_end()) lx.fail("numbers after the header of a skeleton without channels");
   const auto read = static_cast<std::int64_t>(m.clip.frames.size());
   if (read == 0)
     throw InvalidArgument(frames == 0 ? detail::cat(path, ": line ", frames_line, ": Frames: 0 (the motion has no frames)")

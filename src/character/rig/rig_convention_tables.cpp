@@ -241,6 +241,27 @@ std::vector<RigTable> build() {
     b.sig({"luarm", "lfarm", "ab"});
     all.push_back(b.t);
   }
+  {  // Generic bone names seen in BVH from many tools (Biovision's LeftUpArm / LeftLowArm, Rokoko's
+     // LeftThigh / LeftShin, ...): last, so it names a convention only when it explains strictly most
+     // joints; its names also fill in what another table lacks.
+    Builder b("Generic bone names");
+    b.add("pelvis", "pelvis").add("hips", "pelvis").add("hip", "pelvis").add("root", "^");
+    for (const char* side : {"<", "{", "@{", "@<"}) {
+      const std::string sd = side;
+      auto key = [&](const char* base) {
+        return sd == "@{" ? std::string(base) + "{" : sd == "@<" ? std::string(base) + "<" : sd + base;
+      };
+      b.add(key("clavicle"), "clavicle<").add(key("collar"), "clavicle<").add(key("collarbone"), "clavicle<");
+      for (const char* n : {"uparm", "upperarm", "arm"}) b.add(key(n), "upperarm<");
+      for (const char* n : {"lowarm", "lowerarm", "forearm"}) b.add(key(n), "forearm<");
+      b.add(key("hand"), "hand<");
+      for (const char* n : {"upleg", "upperleg", "thigh", "femur"}) b.add(key(n), "thigh<");
+      for (const char* n : {"lowleg", "lowerleg", "shin", "calf", "leg", "tibia"}) b.add(key(n), "shin<");
+      b.add(key("foot"), "foot<").add(key("toe"), "toe<").add(key("toes"), "toe<").add(key("toebase"), "toe<");
+      b.add(key("ball"), "toe<");
+    }
+    all.push_back(b.t);
+  }
   return all;
 }
 
