@@ -670,3 +670,31 @@ TEST_CASE("the shared CMU walk in every convention drives a shared character lik
     CHECK(worst < 0.02f);
   }
 }
+
+TEST_CASE("a shared character's clip (CesiumMan's walk, bound Z-up) drives a fixture rig upright", "[character][motion][data]") {
+  const fs::path cesium = fs::path(GATCORE_SOURCE_DIR) / ".." / "shared" / "data" / "characters" / "khronos" / "CesiumMan.glb";
+  if (!fs::exists(cesium)) {
+    WARN("SKIPPED: the shared data (" << cesium.string() << ") is absent");
+    SUCCEED();
+    return;
+  }
+  const Motion m = load_motion(cesium.string() + "#0");
+  const MotionRig r = map_motion_rig(m.skeleton);
+  INFO(r.frame << "\n" << describe_rig(m.skeleton, r.mapping));
+  REQUIRE(r.mapping.humanoid());
+  for (const char* id : {"cmu", "quaternius", "rigify"}) {
+    const rigfix::Spec dst = spec_named(id);
+    const Skeleton target = rigfix::skeleton(dst);
+    const RigMapping mt = map_rig(target);
+    const Clip clip = retarget(m, target, mat4_identity());
+    REQUIRE(clip.frames.size() == m.clip.frames.size());
+    for (std::size_t f = 0; f < clip.frames.size(); f += 5) {
+      INFO(id << " frame " << f);
+      const auto g = global_transforms(target, clip.frames[f]);
+      auto y = [&](const char* part) { return g[mt.find(part)][13] / dst.units; };
+      // Upright: the head well above the pelvis, the pelvis above the feet.
+      CHECK(y("head") - y("pelvis") > 0.5f);
+      CHECK(y("pelvis") - std::min(y("foot.l"), y("foot.r")) > 0.6f);
+    }
+  }
+}

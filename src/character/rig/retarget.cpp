@@ -284,7 +284,19 @@ Vec3 snap(const Vec3& v, const bool skip[3]) {
 
 }  // namespace
 
-MotionRig map_motion_rig(const Skeleton& s, const BoneAliases& aliases) {
+MotionRig map_motion_rig(const Skeleton& skeleton, const BoneAliases& aliases) {
+  // Read where the retargeter reads the motion: its rest pose in the file's
+  // world (a clip's character may bind in another space, e.g. Z-up
+  // CesiumMan under a turned root node).
+  Skeleton s = skeleton;
+  {
+    const std::vector<Mat4> g = global_transforms(skeleton, rest_pose(skeleton));
+    try {
+      for (std::int32_t j = 0; j < s.num_joints(); ++j) s.inverse_bind[j] = inverse(g[j]);
+    } catch (const InvalidArgument&) {
+      s.inverse_bind = skeleton.inverse_bind;  // a degenerate rest pose: the bind pose will do
+    }
+  }
   // Up along +Y, then the other five axis directions brought onto +Y.
   auto rot = [](Vec3 left, Vec3 up) {  // rows: left, up, forward = left x up
     const Vec3 f = {left[1] * up[2] - left[2] * up[1], left[2] * up[0] - left[0] * up[2], left[0] * up[1] - left[1] * up[0]};
