@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "character_fixtures.hpp"
+#include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/io/asf.hpp"
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/character/io/gltf.hpp"
@@ -697,4 +698,20 @@ TEST_CASE("a shared character's clip (CesiumMan's walk, bound Z-up) drives a fix
       CHECK(y("pelvis") - std::min(y("foot.l"), y("foot.r")) > 0.6f);
     }
   }
+}
+
+TEST_CASE("a dataset keeps an ASF:AMC motion's two paths relative to itself", "[character][motion][dataset]") {
+  const auto [asf, amc] = asf_amc(asf_named(), pose());
+  const std::string a = write("ds_skel.asf", asf), m = write("ds_walk.amc", amc);
+  fs::create_directories(temp_dir() + "/ds");
+  const std::string path = temp_dir() + "/ds/dataset.json";
+  save_dataset(path, describe_dataset({"procedural:humanoid:0", "procedural:humanoid:1", "procedural:humanoid:2"},
+                                      {a + ":" + m}));
+  std::ifstream is(path);
+  const std::string json{std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>()};
+  CHECK_THAT(json, Contains("\"../ds_skel.asf:../ds_walk.amc\""));
+  const DatasetDescription d = load_dataset(path);
+  REQUIRE(d.motions.size() == 1);
+  CHECK(d.motions[0] == fs::path(a).lexically_normal().string() + ":" + fs::path(m).lexically_normal().string());
+  CHECK(load_motion(d.motions[0]).clip.frames.size() == 2);
 }
