@@ -212,20 +212,7 @@ std::pair<std::string, std::string> asf_amc(const rigfix::Spec& spec, const std:
   std::vector<std::vector<std::size_t>> kids(J);
   for (std::size_t j = 0; j < J; ++j)
     if (e.parents[j] >= 0) kids[std::size_t(e.parents[j])].push_back(j);
-  // Each joint's landmark part (for the pose).
-  std::vector<std::string> part(J);
-  {
-    std::size_t j = 0;
-    for (const rigfix::Joint& jt : spec.joints) {
-      const bool sided = jt.name.find('<') != std::string::npos;
-      for (int k = 0; k < (sided ? 2 : 1); ++k, ++j) {
-        std::string w = jt.where;
-        const bool ls = w.find('<') != std::string::npos;
-        for (std::size_t i; (i = w.find('<')) != std::string::npos;) w.erase(i, 1);
-        part[j] = ls ? w + (k == 0 ? ".L" : ".R") : w;
-      }
-    }
-  }
+  const std::vector<std::string> part = rigfix::joint_parts(spec);  // for the pose
   const double scale = 0.45;
   const double to_unit = radians ? 3.14159265358979 / 180.0 : 1.0;
   auto axis_of = [&](const std::string& n) -> Vec3 {
