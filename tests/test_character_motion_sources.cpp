@@ -148,6 +148,18 @@ rigfix::Spec generic_named() {
   return s;
 }
 
+// Bone-named arms (LeftShoulder the collar, LeftArm the upper arm) on joint-named legs
+// (LeftHip the thigh): the names are shifted by one bone between the limbs.
+rigfix::Spec mixed_named() {
+  rigfix::Spec s{"mixed", "Joint-named", "Left", "Right", false, rigfix::Axes::identity, 1.0f, "", {}};
+  s.joints = {{"Hips", "", "pelvis"},          {"Chest", "Hips", "spine:1/2"},        {"Chest2", "Chest", "spine:2/2"},
+              {"Neck", "Chest2", "neck:1/1"},  {"Head", "Neck", "head"},              {"<Shoulder", "Chest2", "clavicle<"},
+              {"<Arm", "<Shoulder", "upperarm<"}, {"<ForeArm", "<Arm", "forearm<"},  {"<Hand", "<ForeArm", "hand<"},
+              {"<Hip", "Hips", "thigh<"},      {"<Knee", "<Hip", "shin<"},            {"<Ankle", "<Knee", "foot<"},
+              {"<Toe", "<Ankle", "toe<"}};
+  return s;
+}
+
 // Left knee bent 45 degrees, left arm raised 60 degrees, right thigh 30
 // forward, right elbow 60; the body moved.
 std::vector<rigfix::PartPose> pose() {
@@ -326,7 +338,8 @@ float angle_deg(const Vec3& a, const Vec3& b) {
 // Every source convention, as files of every kind.
 std::vector<Source> sources(const std::vector<rigfix::PartPose>& poses) {
   std::vector<Source> out;
-  for (rigfix::Spec spec : {spec_named("cmu"), joint_named(), asf_named(), max_named(), opaque(), generic_named()}) {
+  for (rigfix::Spec spec :
+       {spec_named("cmu"), joint_named(), asf_named(), max_named(), opaque(), generic_named(), mixed_named()}) {
     const std::string id = spec.id;
     out.push_back({id + " BVH Y-up m", load_bvh(write(id + "_m.bvh", rigfix::bvh(spec, poses)))});
     out.push_back({id + " BVH Z-up m", z_up(out.back().motion)});
@@ -352,7 +365,7 @@ std::vector<Source> sources(const std::vector<rigfix::PartPose>& poses) {
 }  // namespace
 
 TEST_CASE("joint-named, ASF-named, 3ds Max-named and opaque rigs map by meaning", "[character][rig][motion]") {
-  for (const rigfix::Spec& spec : {joint_named(), asf_named(), max_named(), opaque(), generic_named()}) {
+  for (const rigfix::Spec& spec : {joint_named(), asf_named(), max_named(), opaque(), generic_named(), mixed_named()}) {
     const Motion m = load_bvh(write(spec.id + "_map.bvh", rigfix::bvh(spec, pose())));
     const MotionRig r = map_motion_rig(m.skeleton);
     INFO(spec.id << "\n" << describe_rig(m.skeleton, r.mapping));
