@@ -574,6 +574,8 @@ TEST_CASE("ASF/AMC: units, axes, partial dofs and clear errors", "[character][as
   CHECK_THROWS_WITH(parse_asf(asf_with("direction", "colour"), "f.asf"), Contains("unknown field 'colour'"));
   CHECK_THROWS_WITH(parse_asf(asf_with("    root lhipjoint", "    root lhipjoint lhipjoint"), "t.asf"),
                     Contains("two parents"));
+  CHECK_THROWS_WITH(parse_asf(asf_with("    root lhipjoint", "    ltibia lhipjoint\n    root"), "c.asf"),
+                    Contains("c.asf") && Contains("on a cycle"));
   CHECK_THROWS_WITH(parse_asf_amc(asf, "s.asf", amc + "lfoo 1 2 3\n", "m.amc"),
                     Contains("m.amc: line") && Contains("unknown bone 'lfoo'"));
   CHECK_THROWS_WITH(parse_asf_amc(asf, "s.asf", amc + "lfemur 1 2\n", "m.amc"), Contains("2 values for its 3 dofs"));

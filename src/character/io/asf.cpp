@@ -339,11 +339,14 @@ Asf read_asf(std::string_view text, const std::string& path) {
       queue.push_back(c);
       a.order.push_back(c);
     }
-  if (a.order.size() != a.bones.size())
+  if (a.order.size() != a.bones.size()) {
+    std::vector<char> reached(a.bones.size(), 0);
+    for (int i : a.order) reached[std::size_t(i)] = 1;
     for (std::size_t i = 0; i < a.bones.size(); ++i)
-      if (std::find(a.order.begin(), a.order.end(), int(i)) == a.order.end())
+      if (!reached[i])
         throw InvalidArgument(detail::cat(path, ": :hierarchy: bone '", a.bones[i].name,
                                           "' is on a cycle (never reached from the root)"));
+  }
   if (a.root_order.empty())
     a.root_order = {Dof::tx, Dof::ty, Dof::tz, Dof::rx, Dof::ry, Dof::rz};
   return a;
