@@ -604,6 +604,11 @@ TEST_CASE("load_motion: clips of character files, and clear errors", "[character
   const std::string still = temp_dir() + "/still.glb";
   save_gltf_character(rigfix::character(joint_named()), still);
   CHECK_THROWS_WITH(load_motion(still), Contains(still) && Contains("no animation"));
+  // An animation exported without its mesh: no skin to read a skeleton from.
+  const std::string bare = write("bare.gltf", R"({"asset":{"version":"2.0"},"nodes":[{"name":"Hips"}],)"
+                                              R"("scenes":[{"nodes":[0]}],"scene":0})");
+  CHECK_THROWS_WITH(load_motion(bare + "#walk"), Contains("bare.gltf") && Contains("no skin") &&
+                                                     Contains("export the animation with its character mesh"));
   CHECK_THROWS_WITH(load_motion(temp_dir() + "/lonely.asf"), Contains("holds a skeleton, not a motion"));
   fs::create_directories(temp_dir() + "/orphan");
   CHECK_THROWS_WITH(load_motion(write("orphan/orphan_x.amc", ":FULLY-SPECIFIED\n1\n")),

@@ -58,7 +58,16 @@ Motion clip_of_character(const std::string& spec, const MotionLoadOptions& opt) 
   }
   ImportOptions io;
   io.clip_fps = opt.clip_fps;
-  Character ch = load_character(path, io);
+  Character ch;
+  try {
+    ch = load_character(path, io);
+  } catch (const InvalidArgument& e) {
+    // The importers read the skeleton from the skins: an animation exported
+    // without its mesh has none.
+    if (std::string(e.what()).find("no skin") == std::string::npos) throw;
+    throw InvalidArgument(detail::cat(e.what(), " (a motion is taken from the clips of a skinned character; export "
+                                                "the animation with its character mesh)"));
+  }
   auto names = [&] {
     std::string n;
     for (std::size_t i = 0; i < ch.clips.size(); ++i)
