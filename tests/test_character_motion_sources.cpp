@@ -12,6 +12,8 @@
 #include <map>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "character_fixtures.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/io/asf.hpp"
@@ -604,7 +606,31 @@ TEST_CASE("load_motion: clips of character files, and clear errors", "[character
   const std::string still = temp_dir() + "/still.glb";
   save_gltf_character(rigfix::character(joint_named()), still);
   CHECK_THROWS_WITH(load_motion(still), Contains(still) && Contains("no animation"));
-  // An animation exported without its mesh: no skin to read a skeleton from.
+  // A glTF animation exported without its mesh: the animated nodes are the skeleton.
+  {
+    const std::string with_mesh = gltf_with_clip(joint_named(), m, "anim_only.gltf");
+    nlohmann::json j;
+    std::ifstream(with_mesh) >> j;
+    j.erase("skins");
+    j.erase("meshes");
+    for (auto& n : j["nodes"]) {
+      n.erase("mesh");
+      n.erase("skin");
+    }
+    std::ofstream(with_mesh) << j.dump();
+    const Motion only = load_motion(with_mesh + "#wave");
+    CHECK(only.skeleton.num_joints() == m.skeleton.num_joints());
+    const Skeleton target = rigfix::skeleton(spec_named("vrm"));
+    const RigMapping mt = map_rig(target);
+    const auto a = global_transforms(target, retarget(only, target, mat4_identity()).frames.back());
+    const auto b = global_transforms(target, retarget(m, target, mat4_identity()).frames.back());
+    for (const char* part : {"hand.l", "hand.r", "foot.l", "foot.r", "head"}) {
+      const Vec3 d = sub(mat4_translation(a[mt.find(part)]), mat4_translation(b[mt.find(part)]));
+      INFO(part);
+      CHECK(std::sqrt(dot(d, d)) < 0.02f);
+    }
+  }
+  // No skin and no animation: nothing to read a skeleton from.
   const std::string bare = write("bare.gltf", R"({"asset":{"version":"2.0"},"nodes":[{"name":"Hips"}],)"
                                               R"("scenes":[{"nodes":[0]}],"scene":0})");
   CHECK_THROWS_WITH(load_motion(bare + "#walk"), Contains("bare.gltf") && Contains("no skin") &&

@@ -58,6 +58,7 @@ Motion clip_of_character(const std::string& spec, const MotionLoadOptions& opt) 
   }
   ImportOptions io;
   io.clip_fps = opt.clip_fps;
+  io.allow_no_skin = true;  // a glTF animation exported without its mesh is a motion all the same
   Character ch;
   try {
     ch = load_character(path, io);
@@ -65,8 +66,8 @@ Motion clip_of_character(const std::string& spec, const MotionLoadOptions& opt) 
     // The importers read the skeleton from the skins: an animation exported
     // without its mesh has none.
     if (std::string(e.what()).find("no skin") == std::string::npos) throw;
-    throw InvalidArgument(detail::cat(e.what(), " (a motion is taken from the clips of a skinned character; export "
-                                                "the animation with its character mesh)"));
+    throw InvalidArgument(detail::cat(e.what(), " (from this format a motion is taken from the clips of a skinned "
+                                                "character; export the animation with its character mesh, or as glTF)"));
   }
   auto names = [&] {
     std::string n;

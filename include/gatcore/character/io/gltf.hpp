@@ -16,6 +16,11 @@ struct GltfImportOptions {
   // (empty: the model file's own folder); others ("../../etc/hostname", an
   // absolute path, a symlink out of it) are refused by name.
   std::string resource_root;
+  // A file without skins (an animation exported without its character mesh)
+  // is read as a character without a mesh: its skeleton the animated nodes
+  // and the nodes between them, bound at their node transforms. Read by
+  // load_motion; other callers need a mesh. glTF only (assimp files refuse).
+  bool allow_no_skin = false;
 };
 
 // Merges every skinned primitive of every mesh instance in the file (several
