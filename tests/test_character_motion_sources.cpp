@@ -620,6 +620,14 @@ TEST_CASE("load_motion: clips of character files, and clear errors", "[character
     std::ofstream(with_mesh) << j.dump();
     const Motion only = load_motion(with_mesh + "#wave");
     CHECK(only.skeleton.num_joints() == m.skeleton.num_joints());
+    // The same file through assimp (the FBX / Collada path): the same skeleton and clip.
+    ImportOptions io;
+    io.allow_no_skin = true;
+    const Character via_assimp = load_assimp_character(with_mesh, io);
+    CHECK(via_assimp.mesh.num_vertices() == 0);
+    CHECK(via_assimp.skeleton.num_joints() == m.skeleton.num_joints());
+    REQUIRE(via_assimp.clips.size() == 2);
+    CHECK_THROWS_WITH(load_assimp_character(with_mesh), Contains("no skin"));
     const Skeleton target = rigfix::skeleton(spec_named("vrm"));
     const RigMapping mt = map_rig(target);
     const auto a = global_transforms(target, retarget(only, target, mat4_identity()).frames.back());

@@ -66,8 +66,8 @@ Motion clip_of_character(const std::string& spec, const MotionLoadOptions& opt) 
     // The importers read the skeleton from the skins: an animation exported
     // without its mesh has none.
     if (std::string(e.what()).find("no skin") == std::string::npos) throw;
-    throw InvalidArgument(detail::cat(e.what(), " (from this format a motion is taken from the clips of a skinned "
-                                                "character; export the animation with its character mesh, or as glTF)"));
+    throw InvalidArgument(detail::cat(e.what(), " (a motion needs an animation: of a skinned character, or of "
+                                                "its skeleton's nodes; export the animation with its character mesh)"));
   }
   auto names = [&] {
     std::string n;

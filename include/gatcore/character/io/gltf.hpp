@@ -19,7 +19,7 @@ struct GltfImportOptions {
   // A file without skins (an animation exported without its character mesh)
   // is read as a character without a mesh: its skeleton the animated nodes
   // and the nodes between them, bound at their node transforms. Read by
-  // load_motion; other callers need a mesh. glTF only (assimp files refuse).
+  // load_motion; other callers need a mesh. (load_assimp_character too.)
   bool allow_no_skin = false;
 };
 

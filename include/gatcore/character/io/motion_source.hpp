@@ -28,9 +28,9 @@ struct MotionLoadOptions {
 //                             without '#', the first clip
 // Throws InvalidArgument naming the file: unreadable or malformed files (the
 // readers' own errors), an unknown extension, an AMC without a skeleton (the
-// places looked in), a character file without animations, an FBX / assimp
-// file without a skinned mesh (a glTF one reads its animated nodes as the
-// skeleton), a clip not found (listing the clips the file has).
+// places looked in), a character file without animations (a file without a
+// skinned mesh reads its animated nodes as the skeleton), a clip not found
+// (listing the clips the file has).
 Motion load_motion(const std::string& spec, const MotionLoadOptions& options = {});
 
 // What `gat info` prints for a motion: the convention and up axis the
