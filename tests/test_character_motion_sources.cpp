@@ -171,9 +171,8 @@ std::vector<rigfix::PartPose> pose() {
   return {p};
 }
 
-// The motion stood Z up (Y-up x, y, z -> x, -z, y), as Vicon and 3ds Max write.
-Motion z_up(Motion m) {
-  const Quat r = quat_from_axis_angle({1.0f, 0.0f, 0.0f}, 1.5707963f);  // +Y -> +Z
+// The whole motion turned by r (skeleton and clip, rest rotations kept zero).
+Motion turned(Motion m, const Quat& r) {
   auto turn_root = [&](Transform& t) {
     t.translation = quat_rotate(r, t.translation);
     t.rotation = quat_normalize(quat_mul(r, t.rotation));
@@ -207,6 +206,9 @@ Motion z_up(Motion m) {
   }
   return m;
 }
+
+// The motion stood Z up (Y-up x, y, z -> x, -z, y), as Vicon and 3ds Max write.
+Motion z_up(const Motion& m) { return turned(m, quat_from_axis_angle({1.0f, 0.0f, 0.0f}, 1.5707963f)); }
 
 // R = Rz(c) Ry(b) Rx(a) (ASF "rx ry rz"), angles in degrees.
 Vec3 xyz_degrees(const Quat& q) {
@@ -345,6 +347,7 @@ std::vector<Source> sources(const std::vector<rigfix::PartPose>& poses) {
     const std::string id = spec.id;
     out.push_back({id + " BVH Y-up m", load_bvh(write(id + "_m.bvh", rigfix::bvh(spec, poses)))});
     out.push_back({id + " BVH Z-up m", z_up(out.back().motion)});
+    out.push_back({id + " BVH facing -X", turned(out[out.size() - 2].motion, quat_from_axis_angle({0, 1, 0}, -1.5707963f))});
     spec.units = 100.0f;
     out.push_back({id + " BVH Y-up cm", load_bvh(write(id + "_cm.bvh", rigfix::bvh(spec, poses)))});
     out.push_back({id + " BVH Z-up cm", z_up(out.back().motion)});
@@ -415,13 +418,16 @@ TEST_CASE("an --alias overrides the mapping of a motion", "[character][rig][moti
   CHECK_THAT(before, Contains("read as    Y up, facing +Z"));
 }
 
-TEST_CASE("Z-up motions are stood up", "[character][rig][motion]") {
+TEST_CASE("Z-up motions are stood up, and motions facing away turned round", "[character][rig][motion]") {
   for (const rigfix::Spec& spec : {spec_named("cmu"), joint_named(), opaque()}) {
     const Motion m = z_up(load_bvh(write(spec.id + "_z.bvh", rigfix::bvh(spec, pose()))));
     const MotionRig r = map_motion_rig(m.skeleton);
     INFO(spec.id << "\n" << describe_rig(m.skeleton, r.mapping));
     REQUIRE(r.mapping.humanoid());
     CHECK(r.frame == "Z up, facing -Y (turned to Y up, facing +Z)");
+    const Motion back = turned(load_bvh(write(spec.id + "_y.bvh", rigfix::bvh(spec, pose()))),
+                               quat_from_axis_angle({0, 1, 0}, 3.14159265f));
+    CHECK(map_motion_rig(back.skeleton).frame == "Y up, facing -Z (turned to Y up, facing +Z)");
   }
 }
 
