@@ -242,23 +242,25 @@ inline std::string bvh_name(std::string n) { return n; }
 // The rig as BVH (offsets in file units, every joint ZXY rotation channels,
 // the roots also positions), frame 0 the rest pose, then one frame per pose.
 // A pose's part angles go on the joint whose landmark is that part.
+// Each joint's landmark, sided ("shin.L"), in expand() order: what a pose's parts name.
+inline std::vector<std::string> joint_parts(const Spec& s) {
+  std::vector<std::string> part;
+  for (const Joint& jt : s.joints) {
+    const bool sided = jt.name.find('<') != std::string::npos;
+    for (int k = 0; k < (sided ? 2 : 1); ++k) {
+      std::string w = jt.where;
+      const bool ls = w.find('<') != std::string::npos;
+      for (std::size_t i; (i = w.find('<')) != std::string::npos;) w.erase(i, 1);
+      part.push_back(ls ? w + (k == 0 ? ".L" : ".R") : w);
+    }
+  }
+  return part;
+}
+
 inline std::string bvh(const Spec& s, const std::vector<PartPose>& poses) {
   const Expanded e = expand(s);
   const std::size_t J = e.names.size();
-  // Each joint's landmark (sided) to match a pose's parts.
-  std::vector<std::string> part(J);
-  {
-    std::size_t j = 0;
-    for (const Joint& jt : s.joints) {
-      const bool sided = jt.name.find('<') != std::string::npos;
-      for (int k = 0; k < (sided ? 2 : 1); ++k, ++j) {
-        std::string w = jt.where;
-        const bool ls = w.find('<') != std::string::npos;
-        for (std::size_t i; (i = w.find('<')) != std::string::npos;) w.erase(i, 1);
-        part[j] = ls ? w + (k == 0 ? ".L" : ".R") : w;
-      }
-    }
-  }
+  const std::vector<std::string> part = joint_parts(s);
   std::vector<std::vector<std::size_t>> kids(J);
   for (std::size_t j = 0; j < J; ++j)
     if (e.parents[j] >= 0) kids[e.parents[j]].push_back(j);

@@ -17,7 +17,7 @@
 #include "gatcore/character/rig/motion.hpp"
 #include "gatcore/character/data/procedural.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
-#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/motion_source.hpp"
 #include "progress.hpp"
 #include "gatcore/error.hpp"
 
@@ -150,7 +150,7 @@ int build(BuildArgs& a) {
   }
   progress.finish();
   for (const auto& m : motions) {
-    const Motion mo = load_bvh(m);
+    const Motion mo = load_motion(m);
     if (!a.quiet) std::printf("  %-60s %6zu frames  %3d joints\n", m.c_str(), mo.clip.frames.size(), mo.skeleton.num_joints());
   }
   DatasetDescription d = describe_dataset(good, motions, s);

@@ -16,7 +16,7 @@
 #include "commands.hpp"
 #include "gatcore/character/inference/corrective.hpp"
 #include "gatcore/character/io/bake.hpp"
-#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/motion_source.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
 #include "progress.hpp"
@@ -61,7 +61,7 @@ int run(const DeformArgs& a) {
   models::LoadedModel lm = models::load_checkpoint(model_path);
   const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::displacement);
   const Character ch = load_character(in);
-  const Motion motion = load_bvh(motion_path);
+  const Motion motion = load_motion(motion_path);
   const int nearest = checkpoint_nearest_joints(lm.file, model_path);
   const CorrectiveDeformer d =
       make_corrective_deformer(ch, bones, aliases, checkpoint_distortion_scales(lm.file, model_path), nearest);
@@ -157,7 +157,7 @@ Runner setup_deform(CLI::App& gat) {
                 "origat; trained with gat train --data) predicts to linear blend skinning.");
   c.add_option("MODEL", a->model_path, "a displacement checkpoint (.gcm)")->required();
   c.add_option("CHARACTER", a->in, "the character (.glb / .gltf; others with --point-cache only)")->required();
-  c.add_option("MOTION", a->motion_path, "a BVH motion")->required();
+  c.add_option("MOTION", a->motion_path, "a motion: .bvh, .amc (or SKELETON.asf:MOTION.amc), or a clip of a character file (other.glb#CLIP)")->required();
   add_out(c, a->out,
           "CHARACTER (.glb/.gltf) with one morph target per frame and an animation 'deform' that steps through them "
           "(joints held at the bind pose; the file's own animations are kept and play the plain skinned mesh)");

@@ -11,7 +11,7 @@
 #include "cli_util.hpp"
 #include "commands.hpp"
 #include "gatcore/character/data/dataset.hpp"
-#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/motion_source.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
 #include "gatcore/character/viz/render.hpp"
@@ -43,7 +43,7 @@ int run_errormap(const ErrormapArgs& a) {
     RetargetOptions ro;
     ro.target_name = in;
     ro.source_aliases = ro.target_aliases = aliases;
-    const Clip clip = retarget(load_bvh(motion), pc.character.skeleton, mat4_identity(), ro);
+    const Clip clip = retarget(load_motion(motion), pc.character.skeleton, mat4_identity(), ro);
     GATCORE_CHECK(frame >= 0 && frame < static_cast<long>(clip.frames.size()), motion, ": --frame ", frame,
                   " outside [0, ", clip.frames.size(), ")");
     pose = clip.frames[static_cast<std::size_t>(frame)];
@@ -80,7 +80,7 @@ Runner setup_errormap(CLI::App& gat) {
   add_out(c, a->out, "the PNG to write")->required();
   add_seed(c, a->seed, "the random pose");
   c.add_option("--angle", a->angle, "random joint angles within +-RAD")->check(number_in(0, 3.2))->capture_default_str();
-  c.add_option("--motion", a->motion, "pose from a BVH motion instead of a random pose");
+  c.add_option("--motion", a->motion, "pose from a motion (.bvh, .amc, SKELETON.asf:MOTION.amc, other.glb#CLIP) instead of a random pose");
   c.add_option("--frame", a->frame, "the motion's frame")->check(int_in(0, 100000000))->capture_default_str();
   add_repeatable(c, "--alias", a->aliases,
                  "JOINT=PART: names a joint the rig-convention map misses (gat info shows the body map), e.g. "

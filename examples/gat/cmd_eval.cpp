@@ -97,7 +97,7 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
   c.add_option("--size", a->size, "error-map size in pixels")->check(int_in(16, 8192))->capture_default_str()->group(plain);
   const char* mo = "With --motion";
   auto& m = a->motion;
-  add_repeatable(c, "--motion", m.motions, "a BVH motion to evaluate displacement models on")->group(mo);
+  add_repeatable(c, "--motion", m.motions, "a motion (.bvh, .amc, SKELETON.asf:MOTION.amc, other.glb#CLIP) to evaluate displacement models on")->group(mo);
   c.add_flag("--targets", m.targets,
              "evaluate on the frames of the characters' file targets (gat dataset build --target) instead; no "
              "--motion needed (characters with targets are always evaluated on them)")

@@ -10,12 +10,13 @@
 #include <string>
 #include <vector>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/io/bake.hpp"
-#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/motion_source.hpp"
 #include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
@@ -40,7 +41,7 @@ bool ends_with(const std::string& s, const char* suffix) {
   return true;
 }
 
-void print_character(const Character& ch) {
+void print_character(const Character& ch, const BoneAliases& aliases) {
   const Mesh& m = ch.mesh;
   const Skeleton& s = ch.skeleton;
   const Components comp = connected_components(m);
@@ -93,10 +94,10 @@ void print_character(const Character& ch) {
     std::printf("  %3d %*s%s%s\n", j, 2 * depth[j], "", s.names[j].c_str(), weighted[j] ? "" : "  (no weights)");
   }
   // The rig convention and the body map retargeting uses.
-  std::printf("%s", describe_rig(s, map_rig(s, {}, compute_normalisation(ch).bind_to_world)).c_str());
+  std::printf("%s", describe_rig(s, map_rig(s, aliases, compute_normalisation(ch).bind_to_world)).c_str());
 }
 
-void print_motion(const Motion& m) {
+void print_motion(const Motion& m, const BoneAliases& aliases) {
   const Skeleton& s = m.skeleton;
   std::printf("motion     %s\n", m.name.c_str());
   std::printf("joints     %d\n", s.num_joints());
@@ -108,7 +109,7 @@ void print_motion(const Motion& m) {
     depth[j] = s.parents[j] >= 0 ? depth[s.parents[j]] + 1 : 0;
     std::printf("  %3d %*s%s\n", j, 2 * depth[j], "", s.names[j].c_str());
   }
-  std::printf("%s", describe_rig(s, map_rig(s)).c_str());
+  std::printf("%s", describe_motion_rig(m, aliases).c_str());
 }
 
 void print_dataset(const std::string& path, const DatasetDescription& d) {
@@ -248,18 +249,21 @@ void print_model(const std::string& path) {
 
 }  // namespace
 
-static int run_info(const std::string& path) {
+static int run_info(const std::string& path, const std::vector<std::string>& alias_specs) {
   Activity doing("reading " + path);
+  BoneAliases aliases;  // --alias: the mapping the retargeter would use with it
+  for (const auto& al : alias_specs) add_alias(aliases, al);
+  if (ends_with(path, ".bvh") || ends_with(path, ".amc") || ends_with(path, ".asf") || path.find(".asf:") != std::string::npos ||
+      path.find('#') != std::string::npos) {
+    print_motion(load_motion(path), aliases);
+    return 0;
+  }
   if (ends_with(path, ".glb") || ends_with(path, ".gltf") || ends_with(path, ".fbx") || ends_with(path, ".dae")) {
-    print_character(load_character(path));
+    print_character(load_character(path), aliases);
     return 0;
   }
   if (ends_with(path, ".json")) {
     print_dataset(path, load_dataset(path));
-    return 0;
-  }
-  if (ends_with(path, ".bvh")) {
-    print_motion(load_bvh(path));
     return 0;
   }
   if (ends_with(path, ".pc2")) {
@@ -271,17 +275,19 @@ static int run_info(const std::string& path) {
     return 0;
   }
   throw gatcore::InvalidArgument(path +
-                                 ": unknown file type (expected .glb, .gltf, .fbx, .dae, .bvh, .pc2, .gcm / .safetensors or a dataset .json)");
+                                 ": unknown file type (expected .glb, .gltf, .fbx, .dae, .bvh, .amc, .pc2, .gcm / .safetensors or a dataset .json)");
 }
 
 Runner setup_info(CLI::App& gat) {
   auto path = std::make_shared<std::string>();
+  auto aliases = std::make_shared<std::vector<std::string>>();
   CLI::App& c = add_command(gat, "info", "print what a character, motion, dataset, point cache or model file holds");
   c.add_option("FILE", *path,
-               "a character (.glb / .gltf / .fbx / .dae), a motion (.bvh), a dataset (.json), a point cache (.pc2, "
+               "a character (.glb / .gltf / .fbx / .dae), a motion (.bvh, .amc, SKELETON.asf:MOTION.amc, or CHARACTER#CLIP), a dataset (.json), a point cache (.pc2, "
                "as gat deform writes) or a model checkpoint (.gcm / .safetensors)")
       ->required();
-  return [path] { return run_info(*path); };
+  add_repeatable(c, "--alias", *aliases, "JOINT=BONE: map the joint JOINT onto BONE (a body part or a known joint name)");
+  return [path, aliases] { return run_info(*path, *aliases); };
 }
 
 }  // namespace gat

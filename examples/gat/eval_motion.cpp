@@ -23,7 +23,7 @@
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/inference/character_model.hpp"
-#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/motion_source.hpp"
 #include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
@@ -160,7 +160,7 @@ int gat::eval_motion(const EvalMotionArgs& args) {
     models_.push_back(std::move(m));
   }
   std::vector<Motion> motions;
-  for (const auto& p : motion_paths) motions.push_back(load_bvh(p));
+  for (const auto& p : motion_paths) motions.push_back(load_motion(p));
   const auto dpart = part == "test" ? DatasetPart::test : part == "validation" ? DatasetPart::validation : DatasetPart::train;
   const auto& chars = td.part(dpart);
   GATCORE_CHECK(!chars.empty(), data, " has no ", part, " characters");

@@ -6,6 +6,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   return gatcore::fuzz::guarded([&] {
-    gatcore::character::parse_bvh(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.bvh");
+    gatcore::character::parse_bvh(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.bvh",
+                                      [](const std::string&) {});
   });
 }

@@ -1,5 +1,5 @@
 // Writes the fuzzers' seed corpora with the project's own exporters:
-//   make_corpus DIR  ->  DIR/{checkpoint,bvh,pc2,gltf,dataset}/...
+//   make_corpus DIR  ->  DIR/{checkpoint,bvh,asf,pc2,gltf,dataset}/...
 // Small inputs on purpose (libFuzzer mutates faster on short files).
 #include <filesystem>
 #include <fstream>
@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 int main(int argc, char** argv) {
   if (argc != 2) return 2;
   const fs::path out = argv[1];
-  for (const char* d : {"checkpoint", "bvh", "pc2", "gltf", "dataset"}) fs::create_directories(out / d);
+  for (const char* d : {"checkpoint", "bvh", "asf", "pc2", "gltf", "dataset"}) fs::create_directories(out / d);
 
   // Checkpoints: a small real model with training state, and a two-tensor file.
   models::ModelConfig cfg = models::ModelConfig::defaults("fc", 4, 3);
@@ -42,6 +42,23 @@ int main(int argc, char** argv) {
   std::ofstream(out / "bvh" / "min.bvh") << "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation "
                                             "Yrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\nMOTION\nFrames: 2\n"
                                             "Frame Time: 0.5\n1 2 3\n4 5 6\n";
+
+  // ASF / AMC (fuzz_asf.cpp: the skeleton, then "---amc---" and the motion):
+  // two bones with tilted axes, partial dofs, limits over several lines.
+  {
+    const std::string asf =
+        "# seed\n:version 1.10\n:name seed\n:units\n  mass 1.0\n  length 0.45\n  angle deg\n:documentation\n"
+        "  seed\n:root\n  order TX TY TZ RX RY RZ\n  axis XYZ\n  position 0 0 0\n  orientation 0 0 0\n"
+        ":bonedata\n  begin\n    id 1\n    name lfemur\n    direction 0 -1 0\n    length 7.5\n"
+        "    axis 0 0 20 XYZ\n    dof rx ry rz\n    limits (-160.0 20.0)\n           (-70.0 70.0)\n"
+        "           (-60.0 70.0)\n  end\n  begin\n    id 2\n    name ltibia\n    direction 0 -1 0\n"
+        "    length 7.2\n    axis 0 0 20 XYZ\n    dof rx\n    limits (-10.0 170.0)\n  end\n"
+        ":hierarchy\n  begin\n    root lfemur\n    lfemur ltibia\n  end\n";
+    std::ofstream(out / "asf" / "skeleton.asf") << asf;
+    std::ofstream(out / "asf" / "pair.txt") << asf << "---amc---\n:FULLY-SPECIFIED\n:DEGREES\n1\n"
+                                                      "root 0 17 0 0 0 0\nlfemur 10 0 -5\nltibia 30\n2\n"
+                                                      "root 0 17 1 0 5 0\nlfemur 20 0 -5\n";
+  }
 
   // Point cache.
   character::PointCache pc;

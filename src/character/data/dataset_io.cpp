@@ -1,4 +1,5 @@
 // The dataset description file (JSON, through nlohmann-json).
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <type_traits>
@@ -66,11 +67,24 @@ namespace fs = std::filesystem;
 bool is_file_entry(const std::string& e) { return e.rfind("procedural:", 0) != 0; }
 
 // File entries are stored relative to the dataset file's directory.
+// Each path of an entry: a motion "SKELETON.asf:MOTION.amc" (load_motion) names two.
+template <class F>
+std::string each_path(const std::string& e, F&& f) {
+  std::string low = e;
+  for (char& c : low) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::size_t cut = low.find(".asf:");
+  if (cut == std::string::npos) return f(e);
+  return f(e.substr(0, cut + 4)) + ":" + f(e.substr(cut + 5));
+}
+
 std::vector<std::string> relative_to(const std::vector<std::string>& entries, const std::string& dataset) {
   const fs::path base = fs::absolute(fs::path(dataset)).parent_path();
   std::vector<std::string> out;
   for (const auto& e : entries)
-    out.push_back(is_file_entry(e) ? fs::absolute(e).lexically_normal().lexically_relative(base).generic_string() : e);
+    out.push_back(is_file_entry(e) ? each_path(e, [&](const std::string& p) {
+      return fs::absolute(p).lexically_normal().lexically_relative(base).generic_string();
+    })
+                                   : e);
   return out;
 }
 
@@ -78,7 +92,10 @@ std::vector<std::string> resolve(const std::vector<std::string>& entries, const 
   const fs::path base = fs::absolute(fs::path(dataset)).parent_path();
   std::vector<std::string> out;
   for (const auto& e : entries)
-    out.push_back(is_file_entry(e) && fs::path(e).is_relative() ? (base / e).lexically_normal().string() : e);
+    out.push_back(is_file_entry(e) ? each_path(e, [&](const std::string& p) {
+      return fs::path(p).is_relative() ? (base / p).lexically_normal().string() : p;
+    })
+                                   : e);
   return out;
 }
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/motion_source.hpp"
 #include "gatcore/character/io/target_frames.hpp"
 #include "gatcore/error.hpp"
 
@@ -29,7 +29,7 @@ FileTargetSummary attach_file_targets(PreparedCharacter& pc, const Character& fi
     poses = clip->frames;
   } else {
     GATCORE_CHECK(!src.motion.empty(), what, ": no driving motion for ", src.file, " (a BVH, or clip:NAME)");
-    poses = retarget(load_bvh(src.motion), ch.skeleton, mat4_identity()).frames;
+    poses = retarget(load_motion(src.motion), ch.skeleton, mat4_identity()).frames;
   }
   GATCORE_CHECK(!poses.empty(), what, ": ", motion_name, " has no frames");
 

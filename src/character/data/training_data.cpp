@@ -7,7 +7,7 @@
 
 #include "gatcore/character/data/file_targets.hpp"
 #include "gatcore/character/features/nearest_joints.hpp"
-#include "gatcore/character/io/bvh.hpp"
+#include "gatcore/character/io/motion_source.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -75,7 +75,7 @@ TrainingData load_training_data(const std::string& path, const ProgressFn& progr
   report_progress(progress, std::int64_t(d.characters.size()), std::int64_t(d.characters.size()));
   for (const std::string& m : d.motions) {
     try {
-      t.motions.push_back(load_bvh(m));
+      t.motions.push_back(load_motion(m));
     } catch (const std::exception& ex) {
       throw InvalidArgument(detail::cat(path, ": motion '", m, "': ", ex.what()));
     }

@@ -169,7 +169,18 @@ Character load_assimp_character(const std::string& path, const ImportOptions& op
       is_bone[it->second] = 1;
       any_bone = true;
     }
-  if (!any_bone) fail("no skin: no mesh has bones");
+  // Without skins (an animation exported without its mesh, read as a motion
+  // by request) the skeleton is the animated nodes and the nodes between them.
+  const bool no_skin = !any_bone;
+  if (no_skin && opt.allow_no_skin)
+    for (unsigned ai = 0; ai < scene->mNumAnimations; ++ai)
+      for (unsigned c = 0; c < scene->mAnimations[ai]->mNumChannels; ++c)
+        if (const auto it = by_name.find(scene->mAnimations[ai]->mChannels[c]->mNodeName.C_Str()); it != by_name.end()) {
+          is_bone[it->second] = 1;
+          any_bone = true;
+        }
+  if (!any_bone) fail(no_skin && opt.allow_no_skin ? "no skin: no mesh has bones and no node is animated"
+                                                   : "no skin: no mesh has bones");
   std::vector<char> in_skel = is_bone;
   for (int n = 0; n < N; ++n) {
     if (!is_bone[n]) continue;
@@ -273,8 +284,10 @@ Character load_assimp_character(const std::string& path, const ImportOptions& op
     l.swap(m);
   }
   sk.validate(path.c_str());
-  weld_into(ch, pos, infl, tris, opt.weld_tolerance);
-  ch.mesh.validate(sk.num_joints(), path.c_str());
+  if (!no_skin) {
+    weld_into(ch, pos, infl, tris, opt.weld_tolerance);
+    ch.mesh.validate(sk.num_joints(), path.c_str());
+  }
 
   if (opt.load_clips) {
     GATCORE_CHECK(opt.clip_fps > 0.0f, "clip_fps must be positive, got ", opt.clip_fps);

@@ -13,6 +13,13 @@
 // is the product of the rotation channels in the order listed (intrinsic,
 // degrees); a joint with all three position channels takes them as its local
 // translation, otherwise it keeps its OFFSET; fps = 1 / Frame Time.
+//
+// Lenient where the intent is clear (other readers accept these files too):
+// any rotation channel order, position channels on any joint (each replaces
+// that component of the OFFSET), leaf joints without an End Site, CRLF line
+// ends, tabs and trailing blanks, and a Frames: count that disagrees with the
+// rows of numbers that follow: the whole frames present are read and a
+// warning names both counts. A partial last frame is still an error.
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -24,6 +31,7 @@
 
 #include "gatcore/character/io/bvh.hpp"
 #include "gatcore/error.hpp"
+#include "gatcore/progress.hpp"
 
 namespace gatcore::character {
 
@@ -137,7 +145,7 @@ std::array<double, 4> qmul(const std::array<double, 4>& a, const std::array<doub
 
 }  // namespace
 
-Motion parse_bvh(std::string_view text, const std::string& path) {
+Motion parse_bvh(std::string_view text, const std::string& path, const WarningFn& warn) {
   Lexer lx{text, path};
   lx.expect("HIERARCHY");
   lx.expect("ROOT");
@@ -193,7 +201,6 @@ Motion parse_bvh(std::string_view text, const std::string& path) {
   // ("0 "): the count is bounded by the file before anything is allocated.
   const std::int64_t max_frames = std::max<std::int64_t>(1, std::int64_t(text.size()) / 2 / std::max(1, values_per_frame));
   const std::int64_t frames = lx.count("Frames", std::min<std::int64_t>(max_frames, 10'000'000));
-  if (frames == 0) lx.fail("Frames: 0 (the motion has no frames)");
   lx.expect("Frame");
   lx.expect("Time:");
   const double frame_time = lx.number("Frame Time");
@@ -223,13 +230,23 @@ Motion parse_bvh(std::string_view text, const std::string& path) {
   const std::size_t name_at = path.find_last_of('/');
   m.clip.name = name_at == std::string::npos ? path : path.substr(name_at + 1);
   m.clip.fps = float(1.0 / frame_time);
-  m.clip.frames.resize(std::size_t(frames));
+  m.clip.frames.reserve(std::size_t(frames));
   std::vector<double> v(static_cast<std::size_t>(values_per_frame));
   constexpr double kDeg = 3.14159265358979323846 / 180.0;
-  for (std::int64_t f = 0; f < frames; ++f) {
+  const int frames_line = lx.line;
+  // A skeleton without channels: the count is all there is.
+  if (v.empty())
+    for (std::int64_t f = 0; f < frames; ++f) m.clip.frames.push_back(Pose{s.rest_local});
+  // Whole frames until the numbers end (the Frames: count is only a hint).
+  for (std::int64_t f = 0; !v.empty() && !lx.at_end(); ++f) {
+    if (f >= 10'000'000) lx.fail("more than 10000000 frames");
     for (std::size_t k = 0; k < v.size(); ++k) {
-      if (lx.at_end())
+      if (lx.at_end()) {
+        if (f >= frames)
+          lx.fail(detail::cat("more numbers than ", frames, " frames of ", v.size(), " channels, and not a whole frame more (",
+                              k, " of ", v.size(), " numbers)"));
         lx.fail(detail::cat("the file ends in frame ", f, " of ", frames, " (", v.size(), " numbers per frame)"));
+      }
       v[k] = lx.number([&] {
         for (const JointDef& d : joints)
           if (k < std::size_t(d.first_value) + d.channels.size())
@@ -237,19 +254,17 @@ Motion parse_bvh(std::string_view text, const std::string& path) {
         return detail::cat("frame ", f, " value ", k);
       });
     }
-    Pose& p = m.clip.frames[std::size_t(f)];
+    Pose& p = m.clip.frames.emplace_back();
     p.local = s.rest_local;
     for (std::size_t j = 0; j < joints.size(); ++j) {
       const JointDef& d = joints[j];
       std::array<double, 4> q{0, 0, 0, 1};
       Vec3 pos = d.offset;
-      int positions = 0;
       for (std::size_t c = 0; c < d.channels.size(); ++c) {
         const double x = v[std::size_t(d.first_value) + c];
         const Channel ch = d.channels[c];
         if (ch == Channel::xpos || ch == Channel::ypos || ch == Channel::zpos) {
           pos[std::size_t(ch)] = float(x);
-          ++positions;
           continue;
         }
         const double h = 0.5 * x * kDeg;
@@ -257,22 +272,29 @@ Motion parse_bvh(std::string_view text, const std::string& path) {
         r[std::size_t(ch) - 3] = std::sin(h);
         q = qmul(q, r);
       }
-      if (positions == 3) p.local[j].translation = pos;
+      p.local[j].translation = pos;
       const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
       p.local[j].rotation = {float(q[0] / n), float(q[1] / n), float(q[2] / n), float(q[3] / n)};
     }
   }
-  if (!lx.at_end())
-    lx.fail(detail::cat("more numbers than ", frames, " frames of ", v.size(), " channels (Frames: is wrong?)"));
+  if (v.empty() && !lx.at_end()) lx.fail("numbers after the header of a skeleton without channels");
+  const auto read = static_cast<std::int64_t>(m.clip.frames.size());
+  if (read == 0)
+    throw InvalidArgument(frames == 0 ? detail::cat(path, ": line ", frames_line, ": Frames: 0 (the motion has no frames)")
+                                      : detail::cat(path, ": line ", lx.line, ": the file ends in frame 0 of ", frames,
+                                                    " (no rows of numbers follow)"));
+  if (read != frames)
+    report_warning(warn, detail::cat(path, ": line ", frames_line, ": Frames: says ", frames, " but ", read,
+                                     " frames of ", v.size(), " numbers follow; reading the ", read, " present"));
   return m;
 }
 
-Motion load_bvh(const std::string& path) {
+Motion load_bvh(const std::string& path, const WarningFn& warn) {
   std::ifstream is(path, std::ios::binary);
   GATCORE_CHECK(is.good(), path, ": cannot open file");
   const std::string text{std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>()};
   GATCORE_CHECK(!is.bad(), path, ": read error");
-  return parse_bvh(text, path);
+  return parse_bvh(text, path, warn);
 }
 
 }  // namespace gatcore::character

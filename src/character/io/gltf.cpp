@@ -238,8 +238,18 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
     }
   }
 
-  if (model.skins.empty()) rd.fail("no skin: the file has no skinned character");
+  // Without skins (an animation exported without its mesh, read as a motion
+  // by request) the skeleton is the animated nodes and the nodes between them.
+  const bool no_skin = model.skins.empty();
+  if (no_skin && !opt.allow_no_skin) rd.fail("no skin: the file has no skinned character");
   std::vector<char> in_skin(num_nodes, 0);
+  if (no_skin) {
+    for (const auto& anim : model.animations)
+      for (const auto& c : anim.channels)
+        if (c.target_node >= 0 && c.target_node < num_nodes && model.nodes[c.target_node].mesh < 0) in_skin[c.target_node] = 1;
+    if (std::find(in_skin.begin(), in_skin.end(), 1) == in_skin.end())
+      rd.fail("no skin: the file has no skinned character and no animated nodes");
+  }
   for (std::size_t s = 0; s < model.skins.size(); ++s) {
     if (model.skins[s].joints.empty()) rd.fail("skin ", s, " has no joints");
     for (int j : model.skins[s].joints) {
@@ -338,7 +348,8 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
   }
   const std::size_t ref_skin = static_cast<std::size_t>(
       std::max_element(skin_vertices.begin(), skin_vertices.end()) - skin_vertices.begin());
-  std::vector<std::size_t> skin_order{ref_skin};
+  std::vector<std::size_t> skin_order;
+  if (!no_skin) skin_order.push_back(ref_skin);
   for (std::size_t s = 0; s < model.skins.size(); ++s)
     if (s != ref_skin) skin_order.push_back(s);
   std::vector<char> has_ibm(J, 0);
@@ -480,7 +491,7 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
                                static_cast<std::int64_t>(nv), skin_to_bind[node.skin]});
     }
   }
-  if (ch.primitives.empty()) rd.fail("no skinned mesh: no node has both a mesh with triangles and a skin");
+  if (ch.primitives.empty() && !no_skin) rd.fail("no skinned mesh: no node has both a mesh with triangles and a skin");
   const std::int64_t nfile = static_cast<std::int64_t>(pos.size() / 3);
   for (std::int64_t v = 0; v < nfile; ++v) {
     double sum = 0.0;
@@ -488,8 +499,10 @@ Character load_gltf(const std::string& path, const GltfImportOptions& opt) {
     if (!(sum > 0.0)) rd.fail("file vertex ", v, " has no non-zero skin weight");
   }
 
-  weld_into(ch, pos, infl, tris, opt.weld_tolerance);
-  ch.mesh.validate(J, path.c_str());
+  if (!no_skin) {
+    weld_into(ch, pos, infl, tris, opt.weld_tolerance);
+    ch.mesh.validate(J, path.c_str());
+  }
 
   // Animations, sampled per frame.
   if (opt.load_clips) {

@@ -108,6 +108,47 @@ void save_gltf_character(const Character& ch, const std::string& out_path) {
   mesh.name = mesh_node.name;
   mesh.primitives.push_back(prim);
   m.meshes.push_back(mesh);
+  // Clips: one animation each, a key per frame (linear), translation and
+  // rotation of every joint (scale stays the rest scale).
+  for (const Clip& clip : ch.clips) {
+    if (clip.frames.empty()) continue;
+    GATCORE_CHECK(std::isfinite(clip.fps) && clip.fps > 0.0f, out_path, ": clip '", clip.name, "' at ", clip.fps, " fps");
+    const std::size_t F = clip.frames.size();
+    std::vector<float> times(F);
+    for (std::size_t f = 0; f < F; ++f) times[f] = static_cast<float>(f) / clip.fps;
+    tinygltf::Animation anim;
+    anim.name = clip.name;
+    const int input = gltf_util::append_accessor(m, times.data(), F * 4, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                                 TINYGLTF_TYPE_SCALAR, F);
+    m.accessors[std::size_t(input)].minValues = {0.0};
+    m.accessors[std::size_t(input)].maxValues = {double(times.back())};
+    for (std::int32_t j = 0; j < J; ++j) {
+      std::vector<float> tr(3 * F), rot(4 * F);
+      for (std::size_t f = 0; f < F; ++f) {
+        GATCORE_CHECK(static_cast<std::int32_t>(clip.frames[f].local.size()) == J, out_path, ": clip '", clip.name,
+                      "' frame ", f, " has ", clip.frames[f].local.size(), " joint transforms for ", J, " joints");
+        const Transform& t = clip.frames[f].local[std::size_t(j)];
+        std::copy(t.translation.begin(), t.translation.end(), tr.begin() + 3 * std::ptrdiff_t(f));
+        std::copy(t.rotation.begin(), t.rotation.end(), rot.begin() + 4 * std::ptrdiff_t(f));
+      }
+      for (int k = 0; k < 2; ++k) {
+        tinygltf::AnimationSampler smp;
+        smp.input = input;
+        smp.interpolation = "LINEAR";
+        smp.output = k == 0 ? gltf_util::append_accessor(m, tr.data(), tr.size() * 4, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                                         TINYGLTF_TYPE_VEC3, F)
+                            : gltf_util::append_accessor(m, rot.data(), rot.size() * 4, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                                         TINYGLTF_TYPE_VEC4, F);
+        tinygltf::AnimationChannel ch_;
+        ch_.sampler = static_cast<int>(anim.samplers.size());
+        ch_.target_node = joint_node[std::size_t(j)];
+        ch_.target_path = k == 0 ? "translation" : "rotation";
+        anim.samplers.push_back(smp);
+        anim.channels.push_back(ch_);
+      }
+    }
+    m.animations.push_back(std::move(anim));
+  }
   m.scenes.push_back(scene);
   m.defaultScene = 0;
   gltf_util::write_model_atomic(m, out_path);

@@ -64,6 +64,7 @@ struct Binding {
   std::vector<std::int32_t> aim_t, aim_s;  // per target joint: the joints its bone points to (-1: inherit the parent's alignment)
   std::vector<std::int32_t> anchor;      // per target joint: the mapped body parent it is not under (detached IK feet), or -1
   std::int32_t hips_t = -1, hips_s = -1;  // the pair that carries the root motion
+  Mat4 source_to_world = mat4_identity();  // MotionRig::to_world
   bool by_height = false;                  // scale root motion by whole-skeleton heights (no pelvis pair)
 };
 
@@ -85,7 +86,12 @@ Clip apply(const Motion& motion, const Skeleton& target, const Mat4& bind_to_wor
   const std::int32_t hips_t = b.hips_t, hips_s = b.hips_s;
   const Pose t_rest = world_bind_pose(target, bind_to_world);
   const std::vector<Mat4> tg0 = global_transforms(target, t_rest);
-  const std::vector<Mat4> sg0 = global_transforms(src, rest_pose(src));
+  auto source_globals = [&](const Pose& p) {
+    std::vector<Mat4> g = global_transforms(src, p);
+    for (Mat4& m : g) m = mul(b.source_to_world, m);
+    return g;
+  };
+  const std::vector<Mat4> sg0 = source_globals(rest_pose(src));
   // Rest-pose alignment per mapped joint: rotate the target bone onto the
   // source bone; joints without an aim take their parent's alignment.
   std::vector<Quat> align(static_cast<std::size_t>(J), Quat{0.0f, 0.0f, 0.0f, 1.0f});
@@ -149,7 +155,7 @@ Clip apply(const Motion& motion, const Skeleton& target, const Mat4& bind_to_wor
   float s_ground = 0.0f, t_ground = tg0[hips_t][13];
   for (const Mat4& m : tg0) t_ground = std::min(t_ground, m[13]);
   for (const Pose& frame : motion.clip.frames) {
-    sg_all.push_back(global_transforms(src, frame));
+    sg_all.push_back(source_globals(frame));
     for (const Mat4& m : sg_all.back()) {
       s_ground = first ? m[13] : std::min(s_ground, m[13]);
       first = false;
@@ -257,6 +263,87 @@ std::string refusal(const std::string& what, const Skeleton& s, const RigMapping
 
 }  // namespace
 
+namespace {
+
+const char* axis_name(const Vec3& v) {
+  static const char* names[3][2] = {{"+X", "-X"}, {"+Y", "-Y"}, {"+Z", "-Z"}};
+  for (int a = 0; a < 3; ++a)
+    if (v[std::size_t(a)] != 0.0f) return names[a][v[std::size_t(a)] < 0.0f];
+  return "?";
+}
+
+// The axis nearest `v` (a unit axis vector), among those with skip[a] unset.
+Vec3 snap(const Vec3& v, const bool skip[3]) {
+  int best = -1;
+  for (int a = 0; a < 3; ++a)
+    if (!skip[a] && (best < 0 || std::abs(v[std::size_t(a)]) > std::abs(v[std::size_t(best)]))) best = a;
+  Vec3 out{0.0f, 0.0f, 0.0f};
+  out[std::size_t(best)] = v[std::size_t(best)] < 0.0f ? -1.0f : 1.0f;
+  return out;
+}
+
+}  // namespace
+
+MotionRig map_motion_rig(const Skeleton& skeleton, const BoneAliases& aliases) {
+  // Read where the retargeter reads the motion: its rest pose in the file's
+  // world (a clip's character may bind in another space, e.g. Z-up
+  // CesiumMan under a turned root node).
+  Skeleton s = skeleton;
+  {
+    const std::vector<Mat4> g = global_transforms(skeleton, rest_pose(skeleton));
+    try {
+      for (std::int32_t j = 0; j < s.num_joints(); ++j) s.inverse_bind[j] = inverse(g[j]);
+    } catch (const InvalidArgument&) {
+      s.inverse_bind = skeleton.inverse_bind;  // a degenerate rest pose: the bind pose will do
+    }
+  }
+  // Up along +Y, then the other five axis directions brought onto +Y.
+  auto rot = [](Vec3 left, Vec3 up) {  // rows: left, up, forward = left x up
+    const Vec3 f = {left[1] * up[2] - left[2] * up[1], left[2] * up[0] - left[0] * up[2], left[0] * up[1] - left[1] * up[0]};
+    Mat4 m = mat4_identity();
+    for (int c = 0; c < 3; ++c) {
+      m[std::size_t(c * 4 + 0)] = left[std::size_t(c)];
+      m[std::size_t(c * 4 + 1)] = up[std::size_t(c)];
+      m[std::size_t(c * 4 + 2)] = f[std::size_t(c)];
+    }
+    return m;
+  };
+  const std::vector<std::pair<Vec3, Vec3>> tries = {{{1, 0, 0}, {0, 1, 0}}, {{1, 0, 0}, {0, 0, 1}}, {{0, 1, 0}, {1, 0, 0}},
+                                                    {{1, 0, 0}, {0, 0, -1}}, {{-1, 0, 0}, {0, -1, 0}}, {{0, -1, 0}, {-1, 0, 0}}};
+  for (const auto& [l0, u0] : tries) {
+    const Mat4 w = rot(l0, u0);
+    RigMapping m = map_rig(s, aliases, w);
+    if (!m.humanoid()) continue;
+    // Up: from the thighs to the upper arms; left: the left limbs' side.
+    std::vector<Vec3> at(static_cast<std::size_t>(s.num_joints()));
+    for (std::int32_t j = 0; j < s.num_joints(); ++j) at[j] = mat4_translation(inverse(s.inverse_bind[j]));
+    auto p = [&](const char* part) { return at[m.find(part)]; };
+    Vec3 up{}, left{};
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t k = std::size_t(c);
+      up[k] = p("upperarm.l")[k] + p("upperarm.r")[k] - p("thigh.l")[k] - p("thigh.r")[k];
+      left[k] = p("upperarm.l")[k] + p("thigh.l")[k] - p("upperarm.r")[k] - p("thigh.r")[k];
+    }
+    const bool none[3] = {false, false, false};
+    const Vec3 su = snap(up, none);
+    bool skip[3] = {su[0] != 0.0f, su[1] != 0.0f, su[2] != 0.0f};
+    const Vec3 sl = snap(left, skip);
+    MotionRig r;
+    r.to_world = rot(sl, su);
+    const Vec3 fwd = {sl[1] * su[2] - sl[2] * su[1], sl[2] * su[0] - sl[0] * su[2], sl[0] * su[1] - sl[1] * su[0]};
+    const std::string up_name = axis_name(su);
+    r.frame = detail::cat(up_name[0] == '+' ? up_name.substr(1) : up_name, " up, facing ", axis_name(fwd));
+    if (r.to_world != mat4_identity()) r.frame += " (turned to Y up, facing +Z)";
+    r.mapping = r.to_world == w ? std::move(m) : map_rig(s, aliases, r.to_world);
+    if (!r.mapping.humanoid()) r.mapping = map_rig(s, aliases, w);
+    return r;
+  }
+  MotionRig r;
+  r.mapping = map_rig(s, aliases);
+  r.frame = "Y up, facing +Z (assumed: not a humanoid)";
+  return r;
+}
+
 Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_world, const RetargetMap& map) {
   const Skeleton& src = motion.skeleton;
   const std::int32_t J = target.num_joints();
@@ -284,11 +371,13 @@ Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_
 
 Clip retarget(const Motion& motion, const Skeleton& target, const Mat4& bind_to_world, const RetargetOptions& opt) {
   const Skeleton& src = motion.skeleton;
-  const RigMapping ms = map_rig(src, opt.source_aliases);
+  const MotionRig mr = map_motion_rig(src, opt.source_aliases);
+  const RigMapping& ms = mr.mapping;
   const RigMapping mt = map_rig(target, opt.target_aliases, bind_to_world);
   GATCORE_CHECK(ms.humanoid(), refusal(motion.name + ": the motion's skeleton", src, ms));
   const std::int32_t J = target.num_joints();
   Binding b = unbound(J);
+  b.source_to_world = mr.to_world;
   b.hips_s = ms.find("pelvis");
   if (!mt.humanoid()) {
     if (!opt.root_motion_only) throw InvalidArgument(refusal(opt.target_name, target, mt));

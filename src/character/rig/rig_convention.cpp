@@ -196,6 +196,23 @@ RigMapping map_rig(const Skeleton& s, const BoneAliases& aliases, const Mat4& bi
       }
     if (!found && looks_like_helper(keys[j])) m.role[j] = JointRole::helper;
   }
+  // Names shifted by one bone: a rig mixing joint names (LeftShoulder = the
+  // upper arm) with bone names (LeftArm = the upper arm, LeftShoulder = the
+  // collar) claims the upper arm twice on one chain. The deeper joint is the
+  // upper arm (the forearm hangs under it); the one above it is the collar.
+  for (const char* side : {".l", ".r"}) {
+    std::vector<std::int32_t> claims;
+    for (std::int32_t j = 0; j < J; ++j)
+      if (m.role[j] == JointRole::body && !forced[j] && m.body[j] == std::string("upperarm") + side) claims.push_back(j);
+    if (claims.size() != 2) continue;
+    std::int32_t hi = claims[0], lo = claims[1];
+    if (depth(s, hi) > depth(s, lo)) std::swap(hi, lo);
+    bool above = false;
+    for (std::int32_t p = s.parents[lo]; p >= 0 && !above; p = s.parents[p]) above = p == hi;
+    bool collar = false;
+    for (std::int32_t j = 0; j < J; ++j) collar = collar || m.body[j] == std::string("clavicle") + side;
+    if (above && !collar) m.body[hi] = std::string("clavicle") + side;
+  }
   // One joint per part (chains: one per link): an alias wins, then the
   // joint nearest the root; the others are left alone like helpers.
   {

@@ -205,12 +205,61 @@ std::vector<RigTable> build() {
     b.sig({"leftupperleg", "leftlowerarm", "upperchest", "leftindexproximal"});
     all.push_back(b.t);
   }
+  {  // Joint-named rigs: a name says which joint a bone starts at (Biovision BVH, many studios' and
+     // OptiTrack's BVH exports, the CMU captures' 3ds Max conversion): LeftShoulder is the upper arm,
+     // LeftHip the thigh, LeftAnkle the foot. Sides as Left / L / l prefixes or suffixes.
+    Builder b("Joint-named (Biovision / CMU 3ds Max BVH)");
+    b.add("hips", "pelvis").add("pelvis", "pelvis").add("lowerback", "spine").add("upperback", "spine");
+    b.add("abdomen", "spine").add("chest", "spine").add_each("chest", {"1", "2", "3", "4"}, "spine");
+    b.add("spine", "spine").add_each("spine", {"1", "2", "3"}, "spine").add("neck", "neck");
+    b.add_each("neck", {"1", "2"}, "neck").add("head", "head").add("headend", "-").add("{hipjoint", "-");
+    for (const char* side : {"<", "{", "@{"}) {
+      const std::string sd = side;
+      auto key = [&](const char* base) { return sd == "@{" ? std::string(base) + "{" : sd + base; };
+      b.add(key("collar"), "clavicle<").add(key("clavicle"), "clavicle<").add(key("shoulder"), "upperarm<");
+      b.add(key("elbow"), "forearm<").add(key("wrist"), "hand<").add(key("hip"), "thigh<");
+      b.add(key("knee"), "shin<").add(key("ankle"), "foot<").add(key("toe"), "toe<").add(key("toes"), "toe<");
+    }
+    b.sig({"leftcollar", "leftelbow", "leftwrist", "leftknee", "leftankle", "lefthip", "lelbow", "lknee"});
+    all.push_back(b.t);
+  }
+  {  // The CMU database's own ASF bone names (and BVH files that keep them): a joint per bone, at its start.
+    Builder b("CMU ASF");
+    b.add("root", "pelvis").add("{hipjoint", "-").add("{femur", "thigh<").add("{tibia", "shin<").add("{foot", "foot<");
+    b.add("{toes", "toe<").add("lowerback", "spine").add("upperback", "spine").add("thorax", "spine");
+    b.add("lowerneck", "neck").add("upperneck", "neck").add("head", "head").add("{clavicle", "clavicle<");
+    b.add("{humerus", "upperarm<").add("{radius", "forearm<").add("{wrist", "hand<").add("{hand", "-");
+    b.add("{fingers", "-").add("{thumb", "-");
+    b.sig({"lfemur", "ltibia", "lhumerus", "lradius", "thorax", "upperneck"});
+    all.push_back(b.t);
+  }
   {  // OptiTrack Motive / Arena skeletons: Hip, Ab, Chest, LShoulder, LUArm, LFArm, LThigh, LShin, LToe.
     Builder b("OptiTrack / Arena");
     b.add("hip", "pelvis").add("ab", "spine").add("chest", "spine").add("neck", "neck").add("head", "head");
     b.add("{shoulder", "clavicle<").add("{uarm", "upperarm<").add("{farm", "forearm<").add("{hand", "hand<");
     b.add("{thigh", "thigh<").add("{shin", "shin<").add("{foot", "foot<").add("{toe", "toe<");
     b.sig({"luarm", "lfarm", "ab"});
+    all.push_back(b.t);
+  }
+  {  // Generic bone names seen in BVH from many tools (Biovision's LeftUpArm / LeftLowArm, Rokoko's
+     // LeftThigh / LeftShin, ...): last, so it names a convention only when it explains strictly most
+     // joints; its names also fill in what another table lacks.
+    Builder b("Generic bone names");
+    b.add("pelvis", "pelvis").add("hips", "pelvis").add("hip", "pelvis").add("root", "^");
+    for (const char* side : {"<", "{", "@{", "@<"}) {
+      const std::string sd = side;
+      auto key = [&](const char* base) {
+        return sd == "@{" ? std::string(base) + "{" : sd == "@<" ? std::string(base) + "<" : sd + base;
+      };
+      b.add(key("clavicle"), "clavicle<").add(key("collar"), "clavicle<").add(key("collarbone"), "clavicle<");
+      for (const char* n : {"uparm", "upperarm", "arm"}) b.add(key(n), "upperarm<");
+      for (const char* n : {"lowarm", "lowerarm", "forearm"}) b.add(key(n), "forearm<");
+      b.add(key("hand"), "hand<");
+      for (const char* n : {"upleg", "upperleg", "thigh", "femur"}) b.add(key(n), "thigh<");
+      for (const char* n : {"lowleg", "lowerleg", "shin", "calf", "leg", "tibia"}) b.add(key(n), "shin<");
+      b.add(key("foot"), "foot<").add(key("toe"), "toe<").add(key("toes"), "toe<").add(key("toebase"), "toe<");
+      b.add(key("ball"), "toe<");
+    }
     all.push_back(b.t);
   }
   return all;

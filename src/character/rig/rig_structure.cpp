@@ -3,7 +3,9 @@
 // stands upright: exactly two leaf chains reach the ground (the legs, their
 // lowest common ancestor is the pelvis), two more end well above it far to
 // the sides (the arms, meeting at the chest), and the highest leaf is the
-// head. Knees and elbows are found by where they sit along their chain.
+// head. Knees and elbows are found by where they sit along their chain, and
+// the thigh and upper arm as the joints before them, so names that say the
+// joint a bone starts at, or the bone itself, or nothing, read the same.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -118,22 +120,27 @@ void propose_by_structure(const Skeleton& s, const std::vector<Vec3>& pos, RigMa
   }
   for (int side = 0; side < 2; ++side) {
     const std::string sfx = side == 0 ? ".l" : ".r";
-    // Leg: the thigh starts the first long downward segment; the knee sits
-    // half way down to the ground; the ankle near it; the toe after it.
+    // Leg: the knee is the joint nearest half way down from the pelvis to
+    // the ground; the thigh the last joint before it at least 0.6 of a shin
+    // away (so a hip-joint offset from the pelvis, as CMU rigs have, or a
+    // twist segment is passed over); the ankle the first joint after the
+    // knee near the ground, the toe after it.
     const auto leg = chain(s, m, pelvis, side == 0 ? foot_l : foot_r);
-    std::size_t thigh = leg.size();
-    for (std::size_t i = 0; i + 1 < leg.size() && thigh == leg.size(); ++i) {
-      const float len = dist(pos[leg[i]], pos[leg[i + 1]]), drop = pos[leg[i]][1] - pos[leg[i + 1]][1];
-      if (len > 0.08f * H && drop > 0.5f * len) thigh = i;
-    }
-    if (thigh + 1 < leg.size()) {
-      const float mid = 0.5f * (pos[leg[thigh]][1] + lo);
-      std::size_t knee = thigh + 1;
-      for (std::size_t i = thigh + 1; i < leg.size(); ++i)
+    if (leg.size() >= 2) {
+      const float mid = 0.5f * (pos[pelvis][1] + lo);
+      std::size_t knee = 1;
+      for (std::size_t i = 1; i < leg.size(); ++i)
         if (std::abs(pos[leg[i]][1] - mid) < std::abs(pos[leg[knee]][1] - mid)) knee = i;
       std::size_t ankle = leg.size();
       for (std::size_t i = knee + 1; i < leg.size() && ankle == leg.size(); ++i)
         if (pos[leg[i]][1] < lo + 0.1f * H) ankle = i;
+      const float shin = dist(pos[leg[knee]], pos[leg[ankle < leg.size() ? ankle : leg.size() - 1]]);
+      std::size_t thigh = knee - 1;
+      for (std::size_t i = knee; i-- > 0;)
+        if (dist(pos[leg[i]], pos[leg[knee]]) >= 0.6f * shin) {
+          thigh = i;
+          break;
+        }
       set(leg[thigh], "thigh" + sfx);
       set(leg[knee], "shin" + sfx);
       if (ankle < leg.size()) {

@@ -16,6 +16,11 @@ struct GltfImportOptions {
   // (empty: the model file's own folder); others ("../../etc/hostname", an
   // absolute path, a symlink out of it) are refused by name.
   std::string resource_root;
+  // A file without skins (an animation exported without its character mesh)
+  // is read as a character without a mesh: its skeleton the animated nodes
+  // and the nodes between them, bound at their node transforms. Read by
+  // load_motion; other callers need a mesh. (load_assimp_character too.)
+  bool allow_no_skin = false;
 };
 
 // Merges every skinned primitive of every mesh instance in the file (several
@@ -44,7 +49,9 @@ void save_gltf_with_weights(const std::string& source_path, const Character& ch,
 // new glTF file: one mesh node with the welded mesh (POSITION, NORMAL,
 // JOINTS_n / WEIGHTS_n), one node per joint with its rest transform (a root's
 // non-identity root_parent becomes a parent node), one skin with the inverse
-// bind matrices. load_gltf reads it back as the same character. Atomic.
+// bind matrices; each of ch.clips as an animation (a linear key per frame,
+// every joint's translation and rotation). load_gltf reads it back as the
+// same character. Atomic.
 void save_gltf_character(const Character& ch, const std::string& out_path);
 
 }  // namespace gatcore::character

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "gatcore/character/rig/pose.hpp"
+#include "gatcore/character/rig/rig_convention.hpp"
 #include "gatcore/character/rig/skeleton.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
 
@@ -53,6 +54,21 @@ struct RetargetOptions {
 // gives bind_to_world applied to the bind mesh (e.g. undoing FBX2glTF's Z-up
 // x100 bind space). bind_to_world: NormalisationStats::bind_to_world.
 Pose world_bind_pose(const Skeleton& s, const Mat4& bind_to_world);
+
+// How retarget reads a motion's skeleton: its map onto the canonical body
+// and the rotation that stands it in the retargeter's world (Y up, facing
+// +Z, its left at +X). The up axis and the facing come from the rest pose
+// once the body is mapped (upper arms above thighs, left limbs on the
+// left), snapped to the nearest axes, so Z-up captures (Vicon, 3ds Max,
+// Blender exports) and captures facing another way are driven the same.
+// Names are tried first; a skeleton they do not explain is read by its
+// structure in each of the six axis-aligned up directions.
+struct MotionRig {
+  RigMapping mapping;
+  Mat4 to_world = mat4_identity();  // the motion's world -> Y up, facing +Z (an axis permutation with signs)
+  std::string frame;                // e.g. "Y up, facing +Z" or "Z up, facing -Y (turned to Y up, facing +Z)"
+};
+MotionRig map_motion_rig(const Skeleton& s, const BoneAliases& aliases = {});
 
 // Retargets `motion` onto `target`: every mapped target joint takes the
 // source joint's world rotation change from its rest, applied after aligning
