@@ -1,5 +1,5 @@
 #!/bin/sh
-# Data-parallel scaling of `gat train` (issue 21): steps per second at 1, 2
+# Data-parallel scaling of `gat train`: steps per second at 1, 2
 # and 4 MPI ranks on this machine, one OpenMP thread per rank, the same
 # global batch at every N. On a 2-core machine 4 ranks are oversubscribed, so
 # beyond 2 this measures the overhead of the split (collectives, waiting for

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue #20's "every item has a test that failed before the fix", checked
+# The robustness rule "every item has a test that failed before the fix", checked
 # again for the fixes that can be taken out in place (docs/robustness.md has
 # the rest and the full record). For each entry below: take the fix out of
 # the source (one exact text replacement), rebuild the test, run it and
@@ -123,7 +123,7 @@ check item8_strict_metadata_numbers test_checkpoint src/models/checkpoint.cpp \
 EOF
 
 check item2_5_dataset_ranges test_character_dataset src/character/data/dataset_io.cpp \
-  "dataset files are validated like gat dataset build's options (issue #20 reproducers)" <<'EOF'
+  "dataset files are validated like gat dataset build's options (the shared reproducers)" <<'EOF'
   GATCORE_CHECK(j.is_number(), path, ": field \"", field, "\" must be a number, got ", j.dump());
 ===
   if (lo <= hi) return j.get<T>();
@@ -131,20 +131,20 @@ check item2_5_dataset_ranges test_character_dataset src/character/data/dataset_i
 EOF
 
 check item9_bvh_frames_0 test_character_motion src/character/io/bvh.cpp \
-  "BVH import: the fuzzing reproducers of issue #20 end in a clear error" <<'EOF'
+  "BVH import: the fuzzing shared reproducers end in a clear error" <<'EOF'
   if (frames == 0) lx.fail("Frames: 0 (the motion has no frames)");
 ===
 EOF
 
 check item9_bvh_frame_time test_character_motion src/character/io/bvh.cpp \
-  "BVH import: the fuzzing reproducers of issue #20 end in a clear error" <<'EOF'
+  "BVH import: the fuzzing shared reproducers end in a clear error" <<'EOF'
   if (!(frame_time > 0.0) || !std::isfinite(1.0 / frame_time))
 ===
   if (false)
 EOF
 
 check item9_bvh_finite_numbers test_character_motion src/character/io/bvh.cpp \
-  "BVH import: the fuzzing reproducers of issue #20 end in a clear error" <<'EOF'
+  "BVH import: the fuzzing shared reproducers end in a clear error" <<'EOF'
     if (!std::isfinite(v) || std::abs(v) > 1e30) fail(detail::cat(what(), ": '", t, "' is not a finite number"));
 ===
 EOF

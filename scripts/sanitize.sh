@@ -8,7 +8,7 @@
 #      left to the Release suite: same code paths, 4x the lavapipe time
 #      under ASan; the benchmarks are not built), and
 #   2. every fuzzer for GATCORE_FUZZ_SECONDS (default 30) each, from the
-#      seed corpus plus the issue #20 reproducers and tests/fuzz/found.
+#      seed corpus plus the shared reproducers and tests/fuzz/found.
 # Usage: bash scripts/sanitize.sh [--build-only|--fuzz-only]   (from anywhere)
 set -euo pipefail
 

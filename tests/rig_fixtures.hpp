@@ -302,7 +302,7 @@ inline std::string bvh(const Spec& s, const std::vector<PartPose>& poses) {
   return o.str();
 }
 
-// Every convention of issue #14. Parents are listed before children.
+// Every tested convention. Parents are listed before children.
 inline std::vector<Spec> specs() {
   std::vector<Spec> v;
   const std::vector<std::string> fingers = {"thumb", "index", "middle", "ring", "pinky"};

@@ -111,7 +111,7 @@ TEST_CASE("write_file_atomic: all or nothing", "[io][atomic]") {
 }
 
 TEST_CASE("write_file_atomic: the data is on disk before the rename, the rename before it returns", "[io][atomic]") {
-  // Issue #20 item 13: writes were not fsync'd before the rename, so a power
+  // Writes were not fsync'd before the rename, so a power
   // cut could leave a renamed but empty file.
   const fs::path dir = fs::canonical(fs::temp_directory_path()) / "gatcore_atomic_test";
   fs::create_directories(dir);
@@ -149,7 +149,7 @@ TEST_CASE("glTF, point cache, checkpoint and dataset writers fail cleanly on a f
   check_full_disk(dir / "m.gcm", [&] { models::write_checkpoint_file((dir / "m.gcm").string(), f); });
   CHECK(models::read_checkpoint_file((dir / "m.gcm").string()).tensors.size() == 1);
 
-  // gat dataset build's output (issue #20 item 13: its own temp-file code
+  // gat dataset build's output (its own temp-file code
   // left OUT.tmp behind when the write failed).
   const character::DatasetDescription d =
       character::describe_dataset({"procedural:humanoid:0", "procedural:humanoid:1", "procedural:humanoid:2"}, {});

@@ -98,7 +98,7 @@ TEST_CASE("FBX import rejects bad files", "[character][fbx]") {
 }
 
 namespace {
-// Observes the forks of load_character's containment (issue #20 item 1):
+// Observes the forks of load_character's containment:
 // pthread_atfork's handlers run in this process before each fork and in the
 // child after it. When `crash_child` is set the child dies of SIGSEGV before
 // it parses, standing in for a file that crashes assimp's importer.
@@ -146,7 +146,7 @@ TEST_CASE("FBX import of CesiumMan", "[character][fbx][data]") {
 
 // ---------------------------------------------------------------------------
 // gatcore's own BVH reader gives the same joint transforms as the assimp
-// import it replaced (issue #20: assimp's BVH importer corrupts memory on bad
+// import it replaced (assimp's BVH importer corrupts memory on bad
 // files, so BVH no longer goes through it). The reference below is the old
 // load_bvh, kept here only to compare against, on well-formed files.
 

@@ -272,7 +272,7 @@ TEST_CASE("dataset descriptions round-trip and drive deterministic epochs", "[ch
   CHECK_THROWS_WITH(load_dataset_character("procedural:dragon:1"), Catch::Matchers::Contains("procedural:dragon:1"));
 }
 
-TEST_CASE("dataset files are validated like gat dataset build's options (issue #20 reproducers)", "[character][dataset]") {
+TEST_CASE("dataset files are validated like gat dataset build's options (the shared reproducers)", "[character][dataset]") {
   using Catch::Matchers::Contains;
   const std::string repro = std::string(GATCORE_SOURCE_DIR) + "/tests/fuzz/repro/";
   const std::pair<const char*, const char*> cases[] = {

@@ -423,7 +423,7 @@ TEST_CASE("bake and point cache errors leave no file behind", "[character][expor
   std::string cut = slurp(tmp("ok.pc2"));
   cut.pop_back();
   CHECK_THROWS_WITH(read_point_cache(charfix::write_temp("cut.pc2", cut)), Contains("truncated or corrupted"));
-  // Issue #20: counts from the file are checked against its size before
+  // Counts from the file are checked against its size before
   // anything is allocated, without wrap-around.
   const std::string repro = std::string(GATCORE_SOURCE_DIR) + "/tests/fuzz/repro/";
   CHECK_THROWS_WITH(read_point_cache(repro + "pc2_zero_points_1e9_samples.pc2"),

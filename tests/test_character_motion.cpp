@@ -90,7 +90,7 @@ TEST_CASE("BVH import rejects bad files", "[character][bvh]") {
   CHECK_THROWS_WITH(load_bvh(g), Contains("garbage.bvh"));
 }
 
-TEST_CASE("BVH import: the fuzzing reproducers of issue #20 end in a clear error", "[character][bvh]") {
+TEST_CASE("BVH import: the fuzzing shared reproducers end in a clear error", "[character][bvh]") {
   const std::string dir = std::string(GATCORE_SOURCE_DIR) + "/tests/fuzz/repro/";
   const std::pair<const char*, const char*> cases[] = {
       // assimp: heap-use-after-free, float->unsigned casts, a leaked node

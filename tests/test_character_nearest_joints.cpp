@@ -1,4 +1,4 @@
-// Skeleton-agnostic joint columns for the DenseGATs family (issue #15,
+// Skeleton-agnostic joint columns for the DenseGATs family (
 // features/nearest_joints.hpp): the row function against a sort, the layout
 // text, and a nearest-joint corrective checkpoint deforming skeletons whose
 // names match none of its training bones — the same numbers whatever the

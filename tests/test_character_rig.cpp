@@ -1,4 +1,4 @@
-// Rig conventions: every convention of issue #14 recognised and mapped by
+// Rig conventions: every tested convention recognised and mapped by
 // itself (as a glTF character and as a BVH motion), a known pose moved from
 // every convention onto every other, and loud refusals for rigs that cannot
 // be mapped. The rigs come from tests/rig_fixtures.hpp (written from code).

@@ -1,4 +1,4 @@
-// The skeleton-agnostic skin-weight model (issue #15): bone-candidate features
+// The skeleton-agnostic skin-weight model: bone-candidate features
 // (features/bone_candidates.hpp), its samples (data/bone_candidate_samples.hpp),
 // training on characters with different bone counts in one batch, and
 // prediction that depends on no joint name (inference/weight_prediction.hpp).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The DenseGATs experiment (issue 7; the paper's Tables 2-3, Fig. 8-10) on the
+# The DenseGATs experiment (the paper's Tables 2-3, Fig. 8-10) on the
 # shared Quaternius humanoids: builds the dataset, trains densegats, its two
 # ablations, Ori.GAT and the NeuroSkinning network as a displacement
 # regressor on random poses within the built-in humanoid joint limits,

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Distillation experiment (issue #18): a paper-size DenseGATs teacher, an
+# Distillation experiment: a paper-size DenseGATs teacher, an
 # Ori.GAT student distilled from it (gat distill), and the same Ori.GAT
 # trained directly on the Delta Mush targets with the student's budget, all
 # with the linear skip (the student's fitted to the teacher: within 1 % of

@@ -1,5 +1,5 @@
 // turned_weights: does a skin-weight model give a character the same weights
-// whichever way it faces? (docs/RESULTS.md, issue #15, tenth pass.)
+// whichever way it faces? (docs/RESULTS.md.)
 //
 //   turned_weights DATASET.json MODEL.gcm [PART]
 //

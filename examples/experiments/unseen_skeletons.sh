@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Skin weights on skeletons a model never saw (issue #15): leave-one-family-out
+# Skin weights on skeletons a model never saw: leave-one-family-out
 # on the shared characters, every method on each fold's test characters in one
 # table (bone precision / recall at 1e-4, L1 mean / max, dominant-bone
 # accuracy, deformation error at the two worst of --poses random poses).
@@ -29,7 +29,7 @@
 # validation L1 of the top-4 weights (gat train --keep-best, whose default
 # for skin-weight models is --keep-best-by l1), not of the lowest validation
 # loss: the training loss (cross-entropy over each vertex's candidate bones)
-# stops tracking the weights' L1 late in training (docs/RESULTS.md, issue #15,
+# stops tracking the weights' L1 late in training (docs/experiments/skin-weights.md,
 # "Which checkpoint to evaluate"). The chosen checkpoint is also evaluated on
 # the validation characters by gat eval, and both figures are logged.
 # skinweights-any starts as bone heat over each vertex's 8 nearest bones (its
@@ -49,7 +49,7 @@
 # modular_women/Adventurer.glb is skipped: its leg weights are NaN.
 # Output: DIR (default build/experiments/unseen_skeletons): datasets,
 # checkpoints, logs, per-method JSON and DIR/report.md (every method per
-# character, then issue #15's check per test character: skinweights-any's
+# character, then the check per test character: skinweights-any's
 # L1 below bone heat's, its dominant bone >= 85 %, and the counts). Needs python3.
 set -euo pipefail
 
@@ -182,7 +182,7 @@ for fold in folds:
         for c in j["characters"] + [dict(j["overall"], name="**overall**")]:
             print(f"| {fold} | {c['name']} | {m} | {c['precision']:.3f} | {c['recall']:.3f} | {c['l1_mean']:.4f} | "
                   f"{c['l1_max']:.4f} | {c['dominant']:.3f} | {c['deform_mean']:.5f} | {c['deform_max']:.4f} |")
-# Issue #15's bar per test character: the model's L1 below bone heat's, its
+# The bar per test character: the model's L1 below bone heat's, its
 # dominant bone at least 85 % (for skinweights-any, and with --heat-blend for
 # the mix too).
 for m in ("skinweights-any", "skinweights-any+heat"):

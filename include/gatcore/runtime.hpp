@@ -137,7 +137,7 @@ class WeightPredictor {
   // (1 - share) * model + share * bone heat per vertex, the largest
   // max_influences kept (0, the default: the model alone). A hedge for a
   // character unlike every family the model was trained on
-  // (docs/RESULTS.md, issue #15). Throws unless share is in [0, 1].
+  // (docs/RESULTS.md). Throws unless share is in [0, 1].
   void set_heat_blend(float share);
   // The bone names a name-matched model was trained on; empty for
   // skinweights-any (it takes any skeleton).

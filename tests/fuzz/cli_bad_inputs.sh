@@ -1,5 +1,5 @@
 #!/bin/sh
-# Every issue #20 reproducer through the gat CLI: a non-zero exit within the
+# Every shared reproducer through the gat CLI: a non-zero exit within the
 # time limit and one line naming the file (no crash, hang, or bare
 # standard-library message such as "stof" / "std::bad_alloc").
 # Then the files our own fuzzers found (FOUND_DIR, tests/fuzz/found).

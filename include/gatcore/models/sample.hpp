@@ -1,6 +1,6 @@
 #pragma once
 // The trainer's input: one character (displacement task: one character in
-// one pose) in memory. The character pipeline (issue 4) produces these from
+// one pose) in memory. The character pipeline produces these from
 // its datasets; tests build them procedurally.
 #include <cstdint>
 #include <string>

@@ -114,8 +114,8 @@ struct EpochStats {
 
 // What validation measures. For skin-weight models the loss (KL divergence
 // of the predicted distribution) is not what users judge weights by: late in
-// training it keeps falling while the weights' L1 rises (docs/RESULTS.md,
-// issue #15, "Which checkpoint to evaluate"), so the L1 is measured too.
+// training it keeps falling while the weights' L1 rises (docs/experiments/skin-weights.md,
+// "Which checkpoint to evaluate"), so the L1 is measured too.
 struct Evaluation {
   double loss = 0;
   // Task::weights: per sample the mean over its vertices of

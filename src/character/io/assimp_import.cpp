@@ -1,7 +1,7 @@
 // FBX (and other assimp formats) character import.
 //
 // Containment: assimp's importers are not hardened against hostile files
-// (its BVH importer, no longer used, had a heap-use-after-free; issue #20).
+// (its BVH importer, no longer used, had a heap-use-after-free).
 // A user's file is therefore first parsed by assimp in a forked child
 // process (probe_in_child): a crash, a sanitizer report, an abort or a hang
 // (timeout) there ends the child, not gatcore, and the file is refused with

@@ -2,7 +2,7 @@
 //
 // Why not assimp (which read BVH before): its BVH importer has a
 // heap-use-after-free on a 48-byte file, undefined float->unsigned casts and
-// a per-file leak (issue #20), and users hand gatcore their own files. The
+// a per-file leak, and users hand gatcore their own files. The
 // format is small -- a joint hierarchy with offsets and channel lists, then
 // a table of numbers -- so it is parsed here, with every count bounded by
 // the file and every number checked.

@@ -25,7 +25,7 @@ std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, Dat
 // ignore them: their inv_std becomes 0, so each normalises to 0 whatever the
 // character (Normaliser's rule for a constant column), in training and, since
 // the checkpoint stores the normaliser, in every prediction. (gat train
-// --world-columns ignore; docs/RESULTS.md, issue #15, tenth pass.)
+// --world-columns ignore; docs/RESULTS.md.)
 void ignore_world_columns(models::Normaliser& norm);
 // Whether `norm` (of bone-candidate features) ignores them.
 bool ignores_world_columns(const models::Normaliser& norm);

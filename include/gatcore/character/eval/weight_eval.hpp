@@ -26,7 +26,7 @@ struct WeightEvalOptions {
   // Influences of the prediction below this fraction of the vertex's total
   // are dropped (renormalised) before every metric (limit_weights_dense);
   // 0 keeps them all. Artists often use about 2 influences per vertex, so a
-  // forced top-4 caps precision near 0.5 (issue #15).
+  // forced top-4 caps precision near 0.5.
   float min_weight = 0.0f;
 };
 

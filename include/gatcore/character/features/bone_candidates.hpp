@@ -1,5 +1,5 @@
 #pragma once
-// Skeleton-agnostic skin-weight features (issue #15; in the spirit of RigNet's
+// Skeleton-agnostic skin-weight features (in the spirit of RigNet's
 // skinning network, Xu et al. 2020): instead of one column per bone of a
 // training super skeleton, every vertex lists its K nearest bones of its own
 // skeleton (by distance to the bones' segments, deform/bone_heat.hpp's

@@ -1,5 +1,5 @@
 #pragma once
-// Skeleton-agnostic joint columns for the DenseGATs family (issue #15).
+// Skeleton-agnostic joint columns for the DenseGATs family.
 //
 // The paper's features give a vertex its distance to every joint of the
 // training skeleton, one column per bone *name*: a character with another

@@ -5,7 +5,7 @@
 // --heat-blend mix a model's prediction with bone heat's: on a character
 // unlike every training family (a creature, a mech), a model's learnt
 // corrections are least trustworthy, and the geometry-only method is a hedge
-// (docs/RESULTS.md, issue #15, eleventh pass, measures what it costs on
+// (docs/RESULTS.md measures what it costs on
 // characters like the training ones).
 #include "gatcore/character/rig/mesh.hpp"
 

@@ -2,7 +2,7 @@
 // Influence limits on skin weights: at most `max_influences` joints per
 // vertex (the largest), influences below `min_weight` of the vertex's total
 // dropped, the rest renormalised to sum to 1. A vertex always keeps its
-// largest influence, so no vertex is left without weights (issue #15: a
+// largest influence, so no vertex is left without weights (a
 // forced top-4 caps bone precision near 0.5 on characters whose artists use
 // about two influences; --min-weight prunes the tiny ones).
 #include <cstdint>
