@@ -14,7 +14,9 @@
 #   data       training data: datasets (and their files), samples, procedural characters
 #   eval       metrics, skin-weight evaluation
 #   viz        software rasteriser, plots, loss curves
-#   inference  a trained model applied to a character: per-frame correctives, predicted weights
+#   inference  a trained model applied to a character: per-frame correctives, predicted weights, and
+#              the checkpoint's model description; below data and eval, which train and evaluate
+#              models (they write and read that description)
 #   runtime    the engine-facing API above them (include/gatcore/runtime.hpp, gatcore.h, src/runtime/):
 #              models, rig, deform, features, inference; never datasets, importers, training, pictures
 # The core (include/gatcore/*.hpp, models/, nn/, src/*.cpp, ops/, vulkan/) never
@@ -24,8 +26,8 @@ set(_allowed_rig rig)
 set(_allowed_deform rig deform)
 set(_allowed_io rig deform io)
 set(_allowed_features rig deform features)
-set(_allowed_data rig deform io features data)
-set(_allowed_eval rig deform features data eval)
+set(_allowed_data rig deform io features inference data)
+set(_allowed_eval rig deform features inference data eval)
 set(_allowed_viz rig viz)
 set(_allowed_inference rig deform features inference)
 set(_allowed_runtime rig deform features inference runtime)
