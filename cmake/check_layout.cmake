@@ -12,7 +12,7 @@
 #   io         file formats of characters and motions: glTF, assimp, BVH, baked caches
 #   features   node features, normalisation, the prepared character and its per-frame features
 #   data       training data: datasets (and their files), samples, procedural characters
-#   eval       metrics, skin-weight evaluation
+#   eval       metrics, skin-weight evaluation, the motion evaluation harness (its error maps: viz)
 #   viz        software rasteriser, plots, loss curves
 #   inference  a trained model applied to a character: per-frame correctives, predicted weights, and
 #              the checkpoint's model description; below data and eval, which train and evaluate
@@ -27,7 +27,7 @@ set(_allowed_deform rig deform)
 set(_allowed_io rig deform io)
 set(_allowed_features rig deform features)
 set(_allowed_data rig deform io features inference data)
-set(_allowed_eval rig deform features inference data eval)
+set(_allowed_eval rig deform features inference data viz eval)
 set(_allowed_viz rig viz)
 set(_allowed_inference rig deform features inference)
 set(_allowed_runtime rig deform features inference runtime)
