@@ -268,7 +268,7 @@ TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f, 
 
   BakedFrames baked;
   baked.fps = clip.fps;
-  const float height = 1.0f / d.prepared.norm.scale;
+  const float height = 1.0f / d.prepared.normalisation.scale;
   for (int f = 0; f < 4; ++f) {
     const Pose& pose = clip.frames[std::size_t(f)];
     const CorrectedFrame cf = deform_frame(d, *model, norm, pose);
@@ -452,7 +452,7 @@ TEST_CASE("deform on Vulkan matches the CPU", "[character][export][deform][vulka
                              d.prepared.character.skeleton, mat4_identity());
   const models::Normaliser norm =
       fit_norm(features_in_bone_order(make_densegats_sample(d.prepared, clip.frames[0], 0, 0).features, d.mapping), true);
-  const float height = 1.0f / d.prepared.norm.scale;
+  const float height = 1.0f / d.prepared.normalisation.scale;
   for (int f : {0, 3}) {
     const CorrectedFrame a = deform_frame(d, *cpu, norm, clip.frames[std::size_t(f)]);
     const CorrectedFrame b = deform_frame(d, *vk, norm, clip.frames[std::size_t(f)]);

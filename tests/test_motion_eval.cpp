@@ -17,6 +17,7 @@
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/model.hpp"
+#include "small_dataset.hpp"
 
 using namespace gatcore;
 using namespace gatcore::character;
@@ -29,18 +30,7 @@ struct Fixture {
   std::string data, model, weights_model;
   Motion swing = parse_bvh(procedural_swing_bvh(), "swing.bvh");
   Fixture() {
-    fs::create_directories(dir);
-    data = (dir / "d.json").string();
-    DatasetDescription s;
-    s.random_poses = 1;
-    s.subsample = 300;
-    s.delta_mush.iterations = 5;
-    s.validation = 0.25f;
-    s.test = 0.25f;
-    s.seed = 4;
-    save_dataset(data, describe_dataset({"procedural:humanoid:0", "procedural:humanoid:1", "procedural:creature:2",
-                                         "procedural:humanoid:3"},
-                                        {}, s));
+    data = testing::write_small_dataset(dir);
     const TrainingData td = load_training_data(data);
     // An untrained DenseGATs on the dataset's bone columns, described as gat train would.
     models::ModelConfig cfg = models::ModelConfig::defaults("densegats", td.feature_dim(models::Task::displacement));

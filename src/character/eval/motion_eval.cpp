@@ -215,7 +215,7 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
     const double cm = cm_per_unit > 0 ? cm_per_unit : (ext == ".glb" || ext == ".gltf") ? 100.0 : 0.0;
     all_cm = all_cm && cm > 0;
     common_cm = common_cm < 0 ? cm : (common_cm == cm ? cm : 0.0);
-    const double to_world = 1.0 / double(pc.norm.scale);
+    const double to_world = 1.0 / double(pc.normalisation.scale);
     const std::int64_t n = pc.character.mesh.num_vertices();
     Row chrow{character_label(entry), "all", 0, n, cm, std::vector<Acc>(K)};
     // A character with file targets is evaluated on their frames (the poses
@@ -251,7 +251,7 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
         if (hooks.progress) hooks.progress(done_frames++, all_frames, character_label(entry));
         const Pose& pose = clip.frames[f];
         if (max_excess_deg >= 0 &&
-            pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits, pc.norm.origin_joint).radians > max_excess_deg * std::numbers::pi / 180.0) {
+            pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits, pc.normalisation.origin_joint).radians > max_excess_deg * std::numbers::pi / 180.0) {
           ++row.excluded;
           continue;
         }
@@ -261,7 +261,7 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
         const std::vector<Mat4> g = global_transforms(pc.character.skeleton, pose);
         std::vector<Mat4> S(g.size());
         for (std::size_t j = 0; j < g.size(); ++j) S[j] = mul(g[j], pc.character.skeleton.inverse_bind[j]);
-        const std::vector<float> dqs = apply_normalisation(pc.norm, dual_quaternion_skinning(pc.character.mesh, S));
+        const std::vector<float> dqs = apply_normalisation(pc.normalisation, dual_quaternion_skinning(pc.character.mesh, S));
         std::vector<std::vector<float>> err(K, std::vector<float>(std::size_t(n)));
         std::vector<Tensor> preds;
         // The frame's input per joint-column layout, each made once (models

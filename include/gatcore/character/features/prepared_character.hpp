@@ -26,7 +26,7 @@ Character to_world(const Character& ch, const Mat4& bind_to_world);
 
 struct PreparedCharacter {
   Character character;  // world frame (to_world)
-  NormalisationStats norm;  // of the world-frame character (bind_to_world = identity)
+  NormalisationStats normalisation;  // of the world-frame character (bind_to_world = identity); not the feature statistics (models::Normaliser)
   DeltaMush delta_mush;
   CsrGraph mesh_graph;  // mesh edges + self-loops
   Pose rest;            // bind pose of the world-frame character
