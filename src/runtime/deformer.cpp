@@ -109,7 +109,7 @@ void Deformer::bind(const Mesh& rest, const Skeleton& skeleton, const BindOption
   if (ch.skeleton.root_parent.size() != ch.skeleton.names.size())
     ch.skeleton.root_parent.assign(ch.skeleton.names.size(), mat4_identity());
   auto b = std::make_unique<Bound>();
-  // As make_corrective_deformer: no Delta Mush smoothing, only its one-ring
+  // As make_corrective_binding: no Delta Mush smoothing, only its one-ring
   // adjacency (distortion columns), the mesh graph and the normalisation.
   b->pc = prepare_character(ch, DeltaMushParams{0, 0.5f}, model_->scales);
   if (model_->nearest == 0) b->mapping = map_bones(ch.skeleton, model_->bones, opt.aliases, ch.name);

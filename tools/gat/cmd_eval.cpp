@@ -168,8 +168,8 @@ int run_eval(const EvalArgs& a) {
   LoadedModel l = load_checkpoint(path);
   if (gatcore::models::any_skeleton(l.model->config().kind())) {
     // Each character's own joints (no super skeleton): the baselines' protocol.
-    if (data.empty() && l.file.metadata.count("data_path")) data = l.file.metadata.at("data_path");
-    return gat::eval_weight_baseline("skinweights-any", data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
+    if (data.empty()) data = character::read_model_description(l.file, path).data_path;
+    return gat::eval_weight_baseline(gatcore::models::model_kind_name(gatcore::models::ModelKind::skinweights_any), data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
                                       json_path, a.common.quiet, int(a.confusions), &l, float(a.heat_blend));
   }
   GATCORE_CHECK(a.heat_blend == 0, "--heat-blend: ", path, " is a ", l.model->config().name,

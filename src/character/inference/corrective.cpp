@@ -10,10 +10,10 @@
 
 namespace gatcore::character {
 
-CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
+CorrectiveBinding make_corrective_binding(const Character& ch, const std::vector<std::string>& bones,
                                             const BoneAliases& aliases, std::span<const int> distortion_scales,
                                             int nearest_joints) {
-  CorrectiveDeformer d;
+  CorrectiveBinding d;
   // No Delta Mush smoothing (iterations 0): only its one-ring adjacency is
   // used (distortion columns), with the mesh graph and the normalisation.
   d.prepared = prepare_character(ch, DeltaMushParams{0, 0.5f}, distortion_scales);
@@ -27,7 +27,7 @@ CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vect
   return d;
 }
 
-CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, const models::Normaliser& norm,
+CorrectedFrame deform_frame(const CorrectiveBinding& d, models::Model& model, const models::Normaliser& norm,
                             const Pose& pose) {
   GATCORE_CHECK(model.config().task == models::Task::displacement, d.prepared.character.name, ": ",
                 model.config().name, " predicts skin weights, not displacements");

@@ -37,7 +37,7 @@ struct PreparedCharacter {
   // Training only (data/): the targets' reference deformer when it is not
   // the Delta Mush binding above (ARAP, or file targets with the pose of each
   // of their frames); null: Delta Mush.
-  std::shared_ptr<const ReferenceDeformer> reference;
+  std::shared_ptr<const ReferenceTargets> reference;
   std::vector<Pose> target_poses;
 };
 PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {},
