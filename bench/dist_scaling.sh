@@ -6,9 +6,9 @@
 # a descheduled rank), not a speed-up. Prints a Markdown table for
 # bench/RESULTS.md ("Data-parallel training over MPI").
 #   sh bench/dist_scaling.sh [GAT] [MODEL] [SAMPLE_VERTICES]
-# default: build/examples/gat, neuroskinning at its paper batch (12) and 2048 vertices per sample.
+# default: build/tools/gat, neuroskinning at its paper batch (12) and 2048 vertices per sample.
 set -eu
-gat=${1:-build/examples/gat}
+gat=${1:-build/tools/gat}
 model=${2:-neuroskinning}
 verts=${3:-2048}
 export OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1

@@ -26,9 +26,11 @@
 #   io         file formats of characters and motions: glTF, assimp, BVH, baked caches
 #   features   node features, normalisation, the prepared character and its per-frame features
 #   data       training data: datasets (and their files), samples, procedural characters
-#   eval       metrics, skin-weight evaluation
+#   eval       metrics, skin-weight evaluation, the motion evaluation harness (its error maps: viz)
 #   viz        software rasteriser, plots, loss curves
-#   inference  a trained model applied to a character: per-frame correctives, predicted weights
+#   inference  a trained model applied to a character: per-frame correctives, predicted weights, and
+#              the checkpoint's model description; below data and eval, which train and evaluate
+#              models (they write and read that description)
 #   runtime    the engine-facing API above them: models, rig, deform, features,
 #              inference; never datasets, importers, training, pictures
 cmake_minimum_required(VERSION 3.22)
@@ -41,8 +43,8 @@ set(_allowed_features core nn rig deform features)
 set(_allowed_inference core nn rig deform features inference)
 set(_allowed_runtime core nn rig deform features inference runtime)
 set(_allowed_io core nn train rig deform io)
-set(_allowed_data core nn train rig deform io features data)
-set(_allowed_eval core nn train rig deform features data eval)
+set(_allowed_data core nn train rig deform io features inference data)
+set(_allowed_eval core nn train rig deform features inference data viz eval)
 set(_allowed_viz core nn train rig viz)
 foreach(_l rig deform features inference runtime)
   set(_library_of_${_l} runtime)

@@ -15,7 +15,7 @@
 # almost all of it the two --minutes budgets (125 s measured on a 2-vCPU VM at
 # load average 3.5; README).
 # Usage: bash scripts/demo.sh [--out DIR] [--minutes M (per model, default 1)]
-# (`gat demo` is the kernels' smoke test: build/examples/gat demo.)
+# (`gat demo` is the kernels' smoke test: build/tools/gat demo.)
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -38,7 +38,7 @@ if [[ -f "$build/CMakeCache.txt" ]] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninj
 fi
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release > /dev/null
 cmake --build "$build" -j2 --target gat
-gat="$root/$build/examples/gat"
+gat="$root/$build/tools/gat"
 mkdir -p "$out"
 cd "$out"
 t0=$(date +%s)

@@ -248,7 +248,7 @@ TEST_CASE("checkpoints and characters that do not fit predict-weights / deform",
   auto dgm = small_model("densegats", B);
   CHECK_THROWS_WITH(predict_skin_weights(*dgm, norm, bones, ch), Contains("not skin weights"));
   auto nsm = small_model("neuroskinning", B);
-  const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
+  const CorrectiveBinding d = make_corrective_binding(ch, bones);
   CHECK_THROWS_WITH(deform_frame(d, *nsm, norm, d.prepared.rest), Contains("not displacements"));
 }
 
@@ -259,7 +259,7 @@ TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f, 
   const std::vector<std::string> bones = bone_names(ch.skeleton, {"tail"});
   auto model = small_model("densegats", std::int64_t(bones.size()));
   model->fold_batch_norm();
-  const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
+  const CorrectiveBinding d = make_corrective_binding(ch, bones);
   const Motion motion = load_bvh(charfix::write_temp("swing.bvh", procedural_swing_bvh()));
   const Clip clip = retarget(motion, d.prepared.character.skeleton, mat4_identity());
   REQUIRE(clip.frames.size() >= 4);
@@ -268,7 +268,7 @@ TEST_CASE("deform: morph target f is LBS + the predicted correction of frame f, 
 
   BakedFrames baked;
   baked.fps = clip.fps;
-  const float height = 1.0f / d.prepared.norm.scale;
+  const float height = 1.0f / d.prepared.normalisation.scale;
   for (int f = 0; f < 4; ++f) {
     const Pose& pose = clip.frames[std::size_t(f)];
     const CorrectedFrame cf = deform_frame(d, *model, norm, pose);
@@ -447,12 +447,12 @@ TEST_CASE("deform on Vulkan matches the CPU", "[character][export][deform][vulka
   cpu->fold_batch_norm();
   vk->to(Device::vulkan);
   vk->fold_batch_norm();
-  const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
+  const CorrectiveBinding d = make_corrective_binding(ch, bones);
   const Clip clip = retarget(load_bvh(charfix::write_temp("swing.bvh", procedural_swing_bvh())),
                              d.prepared.character.skeleton, mat4_identity());
   const models::Normaliser norm =
       fit_norm(features_in_bone_order(make_densegats_sample(d.prepared, clip.frames[0], 0, 0).features, d.mapping), true);
-  const float height = 1.0f / d.prepared.norm.scale;
+  const float height = 1.0f / d.prepared.normalisation.scale;
   for (int f : {0, 3}) {
     const CorrectedFrame a = deform_frame(d, *cpu, norm, clip.frames[std::size_t(f)]);
     const CorrectedFrame b = deform_frame(d, *vk, norm, clip.frames[std::size_t(f)]);
@@ -474,7 +474,7 @@ TEST_CASE("deform bakes a real character's walk (FBX2glTF bind space) for viewer
   const std::vector<std::string> bones = bone_names(ch.skeleton);
   auto model = small_model("densegats", std::int64_t(bones.size()));
   model->fold_batch_norm();
-  const CorrectiveDeformer d = make_corrective_deformer(ch, bones);
+  const CorrectiveBinding d = make_corrective_binding(ch, bones);
   const Clip clip = retarget(load_bvh(walk.string()), d.prepared.character.skeleton, mat4_identity());
   const models::Normaliser norm =
       fit_norm(features_in_bone_order(make_densegats_sample(d.prepared, clip.frames[0], 0, 0).features, d.mapping), true);

@@ -51,7 +51,7 @@ Reference reference_sample(const PreparedCharacter& pc, const Pose& pose, std::i
   std::vector<Mat4> skin(g.size());
   for (std::size_t j = 0; j < g.size(); ++j) skin[j] = mul(g[j], ch.skeleton.inverse_bind[j]);
   const std::vector<float> lbs_world = linear_blend_skinning(ch.mesh, skin);
-  const std::vector<float> lbs = apply_normalisation(pc.norm, lbs_world);
+  const std::vector<float> lbs = apply_normalisation(pc.normalisation, lbs_world);
   const std::int32_t r = root_motion_joint(pc);
   const std::vector<Mat4> g_rest = global_transforms(ch.skeleton, pc.rest);
   Transform motion = to_transform(mul(g[std::size_t(r)], inverse(g_rest[std::size_t(r)])));
@@ -63,13 +63,13 @@ Reference reference_sample(const PreparedCharacter& pc, const Pose& pose, std::i
       const Vec3 q = transform_point(to_root, {w[3 * v], w[3 * v + 1], w[3 * v + 2]});
       for (int c = 0; c < 3; ++c) out[3 * v + c] = q[std::size_t(c)];
     }
-    return apply_normalisation(pc.norm, out);
+    return apply_normalisation(pc.normalisation, out);
   };
   const std::vector<float> lbs_root = in_root(lbs_world);
   const std::vector<float> mush_root = in_root(delta_mush_apply(pc.delta_mush, lbs_world));
   const std::vector<float> normals = vertex_normals(lbs_root, ch.mesh.triangles);
   std::vector<Vec3> joints = joint_positions(g);
-  for (Vec3& j : joints) j = apply_normalisation(pc.norm, transform_point(to_root, j));
+  for (Vec3& j : joints) j = apply_normalisation(pc.normalisation, transform_point(to_root, j));
   Reference out;
   std::vector<float> p(3 * m), n(3 * m);
   out.target = Tensor::empty(m, 3);

@@ -108,10 +108,10 @@ TEST_CASE("a nearest-joint corrective model deforms any skeleton, whatever its j
   Character b = a;  // the same rig under other names (as another package would call them)
   for (std::size_t j = 0; j < b.skeleton.names.size(); ++j) b.skeleton.names[j] = "rig_joint_" + std::to_string(j * 7);
   const std::vector<int> scales = checkpoint_distortion_scales(lm.file, path);
-  const CorrectiveDeformer da = make_corrective_deformer(a, bones, {}, scales, 4);
-  const CorrectiveDeformer db = make_corrective_deformer(b, bones, {}, scales, 4);
+  const CorrectiveBinding da = make_corrective_binding(a, bones, {}, scales, 4);
+  const CorrectiveBinding db = make_corrective_binding(b, bones, {}, scales, 4);
   // The paper's layout refuses these skeletons (no joint has a training bone's name).
-  CHECK_THROWS_AS(make_corrective_deformer(a, bones, {}, scales, 0), InvalidArgument);
+  CHECK_THROWS_AS(make_corrective_binding(a, bones, {}, scales, 0), InvalidArgument);
 
   runtime::Deformer rt = runtime::Deformer::load(path);
   rt.bind(b.mesh, b.skeleton);
@@ -137,7 +137,7 @@ TEST_CASE("a nearest-joint corrective model deforms any skeleton, whatever its j
   // metres one in the new units, in gat deform and in the runtime.
   {
     const Character cm = posefix::moved_and_scaled(a, 100.f, {250.f, -40.f, 1300.f});
-    const CorrectiveDeformer dm = make_corrective_deformer(cm, bones, {}, scales, 4);
+    const CorrectiveBinding dm = make_corrective_binding(cm, bones, {}, scales, 4);
     runtime::Deformer rm = runtime::Deformer::load(path);
     rm.bind(cm.mesh, cm.skeleton);
     for (int f = 0; f < 3; ++f) {
@@ -163,7 +163,7 @@ TEST_CASE("a nearest-joint corrective model deforms any skeleton, whatever its j
   // repeats) binds and deforms.
   const Character c = charfix::tube_character(8, 8, 2.0f, 0.25f, 0.3f);
   REQUIRE(c.skeleton.num_joints() < 4);
-  const CorrectiveDeformer dc = make_corrective_deformer(c, bones, {}, scales, 4);
+  const CorrectiveBinding dc = make_corrective_binding(c, bones, {}, scales, 4);
   const CorrectedFrame fc = deform_frame(dc, *lm.model, lm.norm, posefix::test_pose(c.skeleton, 1));
   for (float x : fc.corrected) REQUIRE(std::isfinite(x));
 }

@@ -77,7 +77,7 @@ TEST_CASE("bone candidates of a two-bone tube: nearest first, padded past the jo
   REQUIRE(c.valid == 2);
   REQUIRE(c.features.rows() == n);
   REQUIRE(c.features.cols() == bone_candidate_feature_dim(4));
-  const float s = pc.norm.scale;  // normalised lengths: world * scale
+  const float s = pc.normalisation.scale;  // normalised lengths: world * scale
   for (std::int64_t v = 0; v < n; ++v) {
     const float y = pc.character.mesh.positions[3 * v + 1];
     const float r = std::hypot(pc.character.mesh.positions[3 * v], pc.character.mesh.positions[3 * v + 2]);

@@ -265,7 +265,7 @@ TEST_CASE("targets: a dataset of file targets (morph glTF and .pc2) trains a mod
   DenseGatsSample raw;
   densegats_full_sample(td, 2, pc2.target_poses[5], &raw, 5);
   const Clip clip2 = retarget(motion, pc2.character.skeleton, mat4_identity());
-  const std::vector<float> want = apply_normalisation(pc2.norm, bulge(pc2.character, clip2.frames[7]));  // 2 + 5
+  const std::vector<float> want = apply_normalisation(pc2.normalisation, bulge(pc2.character, clip2.frames[7]));  // 2 + 5
   float worst = 0;
   for (std::int64_t v = 0; v < raw.lbs.rows(); ++v) {
     const Vec3 o = root_offset_to_world(raw, {raw.target.at(v, 0), raw.target.at(v, 1), raw.target.at(v, 2)});

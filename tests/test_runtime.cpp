@@ -1,5 +1,5 @@
 // The runtime (runtime.hpp): Deformer gives bitwise gat deform's numbers
-// (make_corrective_deformer + deform_frame on the loaded, folded checkpoint),
+// (make_corrective_binding + deform_frame on the loaded, folded checkpoint),
 // allocates nothing per frame (a counting malloc hook), runs two characters
 // on two threads at once with unchanged results, and reports bad input as
 // errors naming what is wrong. WeightPredictor equals predict_skin_weights.
@@ -194,7 +194,7 @@ TEST_CASE("runtime::Deformer gives gat deform's numbers bitwise", "[runtime]") {
     // gat deform's path.
     models::LoadedModel lm = models::load_checkpoint(path);
     lm.model->fold_batch_norm();
-    const CorrectiveDeformer ref = make_corrective_deformer(ch, bones, {}, checkpoint_distortion_scales(lm.file, path));
+    const CorrectiveBinding ref = make_corrective_binding(ch, bones, {}, checkpoint_distortion_scales(lm.file, path));
 
     runtime::Deformer d = runtime::Deformer::load(path);
     d.bind(ch.mesh, ch.skeleton);

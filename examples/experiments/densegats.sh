@@ -51,7 +51,7 @@ case "$budget" in
 esac
 data="${GATCORE_DATA:-$root/../shared/data}"
 out="${out:-$root/build/experiments/densegats-$budget}"
-gat="${GAT:-$root/build/examples/gat}"
+gat="${GAT:-$root/build/tools/gat}"
 : "${DG_MODELS:=densegats densegats-l1 densegats-l1-skip densegats-noself densegats-nodense origat neuroskinning}"
 if [ -z "${DG_MOTIONS:-}" ]; then  # full budget: the jump too, when the data has it
   DG_MOTIONS="$data/motion/cmu/walk.bvh"

@@ -13,7 +13,7 @@
 #   DS_TEACHER=<existing teacher .gcm trained on DIR/dataset.json> skips training it.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
-gat="${GAT:-$root/build/examples/gat}"
+gat="${GAT:-$root/build/tools/gat}"
 data="${GATCORE_DATA:-$root/../shared/data}"
 out="$root/build/experiments/distill"
 [ "${1:-}" = --out ] && out="$2"

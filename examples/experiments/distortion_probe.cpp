@@ -53,7 +53,7 @@ void add(Rows& rows, const PreparedCharacter& pc, const Pose& pose) {
   }
   for (std::int64_t v = 0; v < n; ++v) {
     for (int c = 0; c < 3; ++c) rows.target.push_back(s.target.at(v, c));
-    rows.cm.push_back(100.0 / pc.norm.scale);
+    rows.cm.push_back(100.0 / pc.normalisation.scale);
   }
 }
 

@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
                                                  : uniform_limits(ch.skeleton, td.description.pose_angle);
       for (std::size_t k = 0; k < std::min<std::size_t>(5, frames.size()); ++k) {
         const auto [j, w] = dominant(ch.mesh, frames[k].vertex);
-        const LimitExcess ex = pose_limit_excess(ch.skeleton, pc.rest, clip.frames[frames[k].frame], limits, pc.norm.origin_joint);
+        const LimitExcess ex = pose_limit_excess(ch.skeleton, pc.rest, clip.frames[frames[k].frame], limits, pc.normalisation.origin_joint);
         std::printf("  frame %4zu: max %.2f cm at vertex %lld (dominant joint %s, weight %.2f), %lld vertices above 5 cm;"
                     " pose outside the training limits by %.0f deg (%s, axis %d)\n",
                     frames[k].frame, frames[k].error, static_cast<long long>(frames[k].vertex),

@@ -42,7 +42,7 @@ root="$(cd "$here/../.." && pwd)"
 budget=full minutes=6 seed=7
 out="$root/build/experiments/neuroskinning"
 data="${GATCORE_DATA:-$root/../shared/data}"
-gat="$root/build/examples/gat"
+gat="$root/build/tools/gat"
 docs_img=""
 models="neuroskinning neuroskinning-nopool pointnet fc"
 

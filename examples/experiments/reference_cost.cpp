@@ -78,11 +78,11 @@ int main(int argc, char** argv) {
     auto t = Clock::now();
     const ArapBinding arap = arap_bind(w.mesh);
     const double bind_ms = ms_since(t);
-    std::unique_ptr<CorrectiveDeformer> cd;
+    std::unique_ptr<CorrectiveBinding> cd;
     models::LoadedModel lm;
     if (argc > 4) {
       lm = models::load_checkpoint(argv[4]);
-      cd = std::make_unique<CorrectiveDeformer>(make_corrective_deformer(
+      cd = std::make_unique<CorrectiveBinding>(make_corrective_binding(
           ch, character_model_bones(lm, argv[4], models::Task::displacement), {},
           checkpoint_distortion_scales(lm.file, argv[4]), checkpoint_nearest_joints(lm.file, argv[4])));
       lm.model->fold_batch_norm();

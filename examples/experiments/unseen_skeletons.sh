@@ -59,7 +59,7 @@ folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive p
 heat_blend=
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
-gat="$root/build/examples/gat"
+gat="$root/build/tools/gat"
 die() { echo "unseen_skeletons.sh: $*" >&2; exit 2; }
 while [ $# -gt 0 ]; do
   case "$1" in

@@ -13,33 +13,28 @@ namespace gatcore::models {
 const char* task_name(Task t) { return t == Task::weights ? "weights" : "displacement"; }
 const char* displacement_loss_name(DisplacementLoss l) { return l == DisplacementLoss::l1 ? "l1" : "mse"; }
 
+ModelKind ModelConfig::kind() const { return model_kind_from_name(name); }
+
 ModelConfig ModelConfig::defaults(const std::string& name, std::int64_t in_dim, std::int64_t out_dim) {
   ModelConfig c;
+  const ModelKind kind = model_kind_from_name(name);  // throws the "unknown model" message
   c.name = name;
   c.in_dim = in_dim;
-  if (name == "densegats" || name == "origat") {
-  } else if (name == "densegats-noself") {
+  if (predicts_skin_weights(kind)) c.task = Task::weights;
+  if (kind == ModelKind::densegats_noself) {
     c.beta = 0.f;
-  } else if (name == "densegats-nodense") {
+  } else if (kind == ModelKind::densegats_nodense) {
     c.dense = false;
-  } else if (name == "neuroskinning" || name == "fc" || name == "pointnet") {
-    c.task = Task::weights;
-  } else if (name == "neuroskinning-nopool") {
-    c.task = Task::weights;
+  } else if (kind == ModelKind::neuroskinning_nopool) {
     c.pool = false;
-  } else if (name == "skinweights-any") {
+  } else if (kind == ModelKind::skinweights_any) {
     // NeuroSkinning's graph network without geodesic pooling over the
     // skeleton-agnostic bone-candidate features (character/features/
     // bone_candidates.hpp): out_dim = candidates per vertex, not bones.
     // Bone heat's weight of each candidate is the logits' prior (its log):
     // untrained, the model is bone heat over the vertex's candidates.
-    c.task = Task::weights;
     c.pool = false;
     c.logit_prior = true;
-  } else {
-    throw InvalidArgument("unknown model '" + name +
-                          "' (known: densegats, densegats-noself, densegats-nodense, origat, neuroskinning, "
-                          "neuroskinning-nopool, skinweights-any, fc, pointnet)");
   }
   if (out_dim > 0) c.out_dim = out_dim;
   return c;

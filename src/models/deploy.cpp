@@ -164,7 +164,7 @@ GatStep gat_step(Loader& L, const std::string& p, const ModelConfig& c, Device d
 }  // namespace
 
 bool deployable(const ModelConfig& c) {
-  return c.task == Task::displacement && (c.name.rfind("densegats", 0) == 0 || c.name == "origat");
+  return c.task == Task::displacement && deployable(c.kind());
 }
 
 std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normaliser& norm, Device device,
@@ -196,7 +196,7 @@ std::shared_ptr<const DeployModel> make_deploy_model(Model& model, const Normali
     d->has_skip = true;
     d->skip = dense_step(L, "skip.", Activation::identity, 0.f, device, Precision::fp32);
   }
-  if (c.name == "origat") {
+  if (c.kind() == ModelKind::origat) {
     d->origat = true;
     for (int l = 0; l < c.gat_layers; ++l) {
       const std::string p = "layers." + std::to_string(l) + ".";

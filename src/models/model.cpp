@@ -9,8 +9,9 @@
 namespace gatcore::models {
 
 std::vector<std::string> model_names() {
-  return {"densegats", "densegats-noself", "densegats-nodense", "origat",
-          "neuroskinning", "neuroskinning-nopool", "skinweights-any", "fc", "pointnet"};
+  std::vector<std::string> names;
+  for (ModelKind k : all_model_kinds()) names.emplace_back(model_kind_name(k));
+  return names;
 }
 
 std::unique_ptr<Model> make_model(const ModelConfig& cfg, std::uint64_t seed) {
@@ -18,13 +19,17 @@ std::unique_ptr<Model> make_model(const ModelConfig& cfg, std::uint64_t seed) {
   GATCORE_CHECK(cfg.out_dim > 0, "model '", cfg.name, "': out_dim must be positive");
   GATCORE_CHECK(cfg.task == Task::weights || cfg.out_dim == 3, "model '", cfg.name,
                 "': the displacement task has 3 outputs, got out_dim ", cfg.out_dim);
-  const std::string& n = cfg.name;
-  if (n.rfind("densegats", 0) == 0) return detail::make_densegats(cfg, seed);
-  if (n == "origat") return detail::make_origat(cfg, seed);
-  if (n.rfind("neuroskinning", 0) == 0 || n == "skinweights-any") return detail::make_neuroskinning(cfg, seed);
-  if (n == "fc") return detail::make_fc(cfg, seed);
-  if (n == "pointnet") return detail::make_pointnet(cfg, seed);
-  ModelConfig::defaults(n, 1);  // throws the "unknown model" message
+  switch (cfg.kind()) {  // throws the "unknown model" message
+    case ModelKind::densegats:
+    case ModelKind::densegats_noself:
+    case ModelKind::densegats_nodense: return detail::make_densegats(cfg, seed);
+    case ModelKind::origat: return detail::make_origat(cfg, seed);
+    case ModelKind::neuroskinning:
+    case ModelKind::neuroskinning_nopool:
+    case ModelKind::skinweights_any: return detail::make_neuroskinning(cfg, seed);
+    case ModelKind::fc: return detail::make_fc(cfg, seed);
+    case ModelKind::pointnet: return detail::make_pointnet(cfg, seed);
+  }
   return nullptr;
 }
 

@@ -109,7 +109,7 @@ void Deformer::bind(const Mesh& rest, const Skeleton& skeleton, const BindOption
   if (ch.skeleton.root_parent.size() != ch.skeleton.names.size())
     ch.skeleton.root_parent.assign(ch.skeleton.names.size(), mat4_identity());
   auto b = std::make_unique<Bound>();
-  // As make_corrective_deformer: no Delta Mush smoothing, only its one-ring
+  // As make_corrective_binding: no Delta Mush smoothing, only its one-ring
   // adjacency (distortion columns), the mesh graph and the normalisation.
   b->pc = prepare_character(ch, DeltaMushParams{0, 0.5f}, model_->scales);
   if (model_->nearest == 0) b->mapping = map_bones(ch.skeleton, model_->bones, opt.aliases, ch.name);
@@ -210,7 +210,7 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
         const float ax = a[0], ay = a[1], az = a[2];
         float* dst = x.row(v) + f + 3 * std::int64_t(k);
         for (int c = 0; c < 3; ++c) {
-          const float r = (to_root[c] * ax + to_root[4 + c] * ay + to_root[8 + c] * az) * pc.norm.scale;
+          const float r = (to_root[c] * ax + to_root[4 + c] * ay + to_root[8 + c] * az) * pc.normalisation.scale;
           dst[c] = r - posed[std::size_t(3 * v + c)];
         }
       }
@@ -222,12 +222,12 @@ void Deformer::deform(std::span<const float> joint_globals, std::span<float> out
 
   // deform_frame: normalised units back to the character's; the model
   // predicts in the root frame (root_offset_to_world).
-  const float inv = 1.0f / pc.norm.scale;
+  const float inv = 1.0f / pc.normalisation.scale;
   std::int64_t bad = -1;
   for (std::int64_t v = 0; v < n; ++v) {
     const Vec3 o = root_offset_to_world(fr.root_motion, {y.at(v, 0), y.at(v, 1), y.at(v, 2)});
     for (int c = 0; c < 3; ++c) {
-      const float l = fr.lbs[std::size_t(3 * v + c)] * inv + pc.norm.origin[std::size_t(c)];
+      const float l = fr.lbs[std::size_t(3 * v + c)] * inv + pc.normalisation.origin[std::size_t(c)];
       const float off = o[std::size_t(c)] * inv;
       if (!std::isfinite(off) && bad < 0) bad = v;
       if (!out_lbs.empty()) out_lbs[std::size_t(3 * v + c)] = l;

@@ -29,7 +29,7 @@ WeightPredictor WeightPredictor::load(const std::string& path, DeviceChoice devi
   const Device dev = resolve_device(device);
   auto m = std::make_unique<LoadedWeights>();
   m->lm = models::load_checkpoint(path);
-  m->any = m->lm.model->config().name == "skinweights-any";
+  m->any = models::any_skeleton(m->lm.model->config().kind());
   if (!m->any) m->bones = character::character_model_bones(m->lm, path, models::Task::weights);
   m->lm.model->to(dev);
   m->lm.model->fold_batch_norm();

@@ -25,8 +25,7 @@ Sampling sampling_from_name(const std::string& name) {
 
 TrainOptions TrainOptions::defaults_for(const ModelConfig& cfg) {
   TrainOptions o;
-  const bool ns = cfg.name.rfind("neuroskinning", 0) == 0 || cfg.name == "fc" || cfg.name == "pointnet";
-  if (ns) {
+  if (uses_neuroskinning_features(cfg.kind())) {
     o.batch_size = 12;
     o.sampling = Sampling::random;
     o.sample_vertices = 2048;

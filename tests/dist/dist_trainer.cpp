@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   const std::string name = argv[1], out = argv[2];
   dist::Communicator& comm = dist::world();
   try {
-    const bool weights = name.rfind("neuroskinning", 0) == 0 || name == "fc" || name == "pointnet";
+    const bool weights = models::uses_neuroskinning_features(models::model_kind_from_name(name));
     std::vector<Sample> train, val;
     for (int k = 0; k < 10; ++k)
       train.push_back(fixtures::wave_sample(9 + k % 3, 8 + k % 2, 0.3f * float(k), weights, 5, "t" + std::to_string(k)));

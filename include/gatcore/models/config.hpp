@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/models/model_kind.hpp"
+
 namespace gatcore::models {
 
 enum class Task { displacement, weights };  // MSE on [n,3] offsets / KL on [n,|B|] skin weights
@@ -18,7 +20,7 @@ enum class DisplacementLoss { mse, l1 };
 const char* displacement_loss_name(DisplacementLoss l);
 
 struct ModelConfig {
-  std::string name = "densegats";
+  std::string name = "densegats";  // a ModelKind's name (model_kind_name); kind() reads it
   Task task = Task::displacement;
   DisplacementLoss loss = DisplacementLoss::mse;  // displacement task only (weights: KL)
   std::int64_t in_dim = 0;   // node feature width (required)
@@ -71,6 +73,8 @@ struct ModelConfig {
   // Skin-weight post-processing: keep the top κ bones per vertex.
   int top_k = 4;
 
+  // The kind `name` names; throws InvalidArgument for a name that is no kind.
+  ModelKind kind() const;
   // The paper defaults of a named model (see model_names()).
   static ModelConfig defaults(const std::string& name, std::int64_t in_dim, std::int64_t out_dim = -1);
   std::string to_text() const;

@@ -38,7 +38,7 @@ FileTargetSummary attach_file_targets(PreparedCharacter& pc, const Character& fi
   s.first_frame = src.first_frame ? *src.first_frame : t.start_frame;
   s.step = t.frame_step;
   s.motion_frames = static_cast<std::int64_t>(poses.size());
-  const double height = 1.0 / double(pc.norm.scale);
+  const double height = 1.0 / double(pc.normalisation.scale);
   pc.target_poses.clear();
   for (std::int32_t k = 0; k < s.frames; ++k) {
     const double m = s.first_frame + double(k) * s.step;

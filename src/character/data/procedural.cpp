@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/character/rig/vec3.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -21,16 +22,6 @@ struct Rng {
   float uniform(float lo, float hi) { return lo + (hi - lo) * static_cast<float>(g() >> 8) / static_cast<float>(1u << 24); }
 };
 
-Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 scale(const Vec3& a, float s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Vec3 normalise(const Vec3& a) {
-  const float l = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-  return l > 0.0f ? scale(a, 1.0f / l) : a;
-}
 
 struct Builder {
   Character ch;

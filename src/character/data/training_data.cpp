@@ -7,6 +7,7 @@
 
 #include "gatcore/character/data/file_targets.hpp"
 #include "gatcore/character/features/nearest_joints.hpp"
+#include "gatcore/character/inference/model_description.hpp"
 #include "gatcore/character/io/motion_source.hpp"
 #include "gatcore/error.hpp"
 
@@ -86,11 +87,7 @@ TrainingData load_training_data(const std::string& path, const ProgressFn& progr
   return t;
 }
 
-std::string joined_bone_names(const SuperSkeleton& s) {
-  std::string r;
-  for (const auto& n : s.names) r += (r.empty() ? "" : ",") + n;
-  return r;
-}
+std::string joined_bone_names(const SuperSkeleton& s) { return joined_bone_names(s.names); }
 
 namespace {
 

@@ -17,7 +17,7 @@ ReferenceKind parse_reference_kind(const std::string& name, const std::string& w
 
 namespace {
 
-class DeltaMushReference final : public ReferenceDeformer {
+class DeltaMushReference final : public ReferenceTargets {
  public:
   DeltaMushReference(const Mesh& mesh, const DeltaMushParams& p) : dm_(delta_mush_bind(mesh, p)) {}
   ReferenceKind kind() const override { return ReferenceKind::delta_mush; }
@@ -29,7 +29,7 @@ class DeltaMushReference final : public ReferenceDeformer {
   DeltaMush dm_;
 };
 
-class ArapReference final : public ReferenceDeformer {
+class ArapReference final : public ReferenceTargets {
  public:
   ArapReference(const Mesh& mesh, const ArapParams& p) : b_(arap_bind(mesh, p)) {}
   ReferenceKind kind() const override { return ReferenceKind::arap; }
@@ -39,7 +39,7 @@ class ArapReference final : public ReferenceDeformer {
   ArapBinding b_;
 };
 
-class FileReference final : public ReferenceDeformer {
+class FileReference final : public ReferenceTargets {
  public:
   FileReference(std::vector<std::vector<float>> f, std::string source) : frames_(std::move(f)), source_(std::move(source)) {}
   ReferenceKind kind() const override { return ReferenceKind::files; }
@@ -61,13 +61,13 @@ class FileReference final : public ReferenceDeformer {
 
 }  // namespace
 
-std::shared_ptr<const ReferenceDeformer> delta_mush_reference(const Mesh& mesh, const DeltaMushParams& params) {
+std::shared_ptr<const ReferenceTargets> delta_mush_reference(const Mesh& mesh, const DeltaMushParams& params) {
   return std::make_shared<DeltaMushReference>(mesh, params);
 }
-std::shared_ptr<const ReferenceDeformer> arap_reference(const Mesh& mesh, const ArapParams& params) {
+std::shared_ptr<const ReferenceTargets> arap_reference(const Mesh& mesh, const ArapParams& params) {
   return std::make_shared<ArapReference>(mesh, params);
 }
-std::shared_ptr<const ReferenceDeformer> file_reference(std::vector<std::vector<float>> frames, std::string source) {
+std::shared_ptr<const ReferenceTargets> file_reference(std::vector<std::vector<float>> frames, std::string source) {
   return std::make_shared<FileReference>(std::move(frames), std::move(source));
 }
 

@@ -157,8 +157,8 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
                 pc.character.skeleton.num_joints(), " joints");
   GATCORE_CHECK(opts.poses >= 0 && opts.worst >= 1, "evaluate_character_weights: poses ", opts.poses, ", worst ",
                 opts.worst);
-  GATCORE_CHECK(pc.norm.scale > 0.0f && std::isfinite(pc.norm.scale), "evaluate_character_weights: character scale ",
-                pc.norm.scale);
+  GATCORE_CHECK(pc.normalisation.scale > 0.0f && std::isfinite(pc.normalisation.scale), "evaluate_character_weights: character scale ",
+                pc.normalisation.scale);
   std::vector<float> pruned;
   std::span<const float> predicted = predicted_in;
   if (opts.min_weight > 0.0f) {
@@ -168,7 +168,7 @@ CharacterWeightEval evaluate_character_weights(const PreparedCharacter& pc, std:
   }
   CharacterWeightEval r;
   r.vertices = n;
-  r.height = 1.0 / static_cast<double>(pc.norm.scale);
+  r.height = 1.0 / static_cast<double>(pc.normalisation.scale);
   r.weights = weight_metrics(predicted, truth, num_bones, opts.threshold, mask);
   {
     // Bone columns -> the character's joint names.
@@ -223,8 +223,8 @@ DistanceStats deformation_error(const PreparedCharacter& pc, const SkinWeights& 
   GATCORE_CHECK(predicted.num_vertices() == n && truth.num_vertices() == n, "deformation_error: ",
                 predicted.num_vertices(), " predicted and ", truth.num_vertices(), " true weight rows for ", n,
                 " vertices");
-  GATCORE_CHECK(pc.norm.scale > 0.0f && std::isfinite(pc.norm.scale), "deformation_error: character scale ",
-                pc.norm.scale);
+  GATCORE_CHECK(pc.normalisation.scale > 0.0f && std::isfinite(pc.normalisation.scale), "deformation_error: character scale ",
+                pc.normalisation.scale);
   Mesh pred = pc.character.mesh, gt = pc.character.mesh;
   pred.weights = predicted;
   gt.weights = truth;
@@ -241,7 +241,7 @@ DistanceStats deformation_error(const PreparedCharacter& pc, const SkinWeights& 
       d[static_cast<std::size_t>(v)] = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
     }
   }
-  return worst_poses_error(distances, 1.0 / static_cast<double>(pc.norm.scale), worst);
+  return worst_poses_error(distances, 1.0 / static_cast<double>(pc.normalisation.scale), worst);
 }
 
 WeightEvalSummary summarise_weight_eval(const std::vector<CharacterWeightEval>& per_character) {

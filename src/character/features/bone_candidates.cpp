@@ -27,12 +27,12 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
   out.features = Tensor::zeros(n, dim);
   // Position and normal columns: NeuroSkinning's first six.
   const Tensor base = neuroskinning_rest_features(pc, all_vertices(n));
-  const std::vector<float> rest = apply_normalisation(pc.norm, ch.mesh.positions);
+  const std::vector<float> rest = apply_normalisation(pc.normalisation, ch.mesh.positions);
   // Segments in the normalised frame.
   const auto segs = bone_segments(sk);
   std::vector<std::vector<std::pair<Vec3, Vec3>>> seg(static_cast<std::size_t>(nj));
   for (std::int32_t j = 0; j < nj; ++j)
-    for (const auto& s : segs[j]) seg[j].push_back({apply_normalisation(pc.norm, s.a), apply_normalisation(pc.norm, s.b)});
+    for (const auto& s : segs[j]) seg[j].push_back({apply_normalisation(pc.normalisation, s.a), apply_normalisation(pc.normalisation, s.b)});
   std::vector<int> depth(static_cast<std::size_t>(nj), 0);
   int max_depth = 1;
   for (std::int32_t j = 0; j < nj; ++j) {

@@ -19,7 +19,7 @@ std::vector<float> to_root_frame(const PreparedCharacter& pc, const PosedFrame& 
     const Vec3 q = transform_point(f.to_root, {w[3 * v], w[3 * v + 1], w[3 * v + 2]});
     for (int c = 0; c < 3; ++c) out[3 * v + c] = q[std::size_t(c)];
   }
-  return apply_normalisation(pc.norm, out);
+  return apply_normalisation(pc.normalisation, out);
 }
 
 Mat4 rest_root_inverse(const PreparedCharacter& pc) {
@@ -43,7 +43,7 @@ void pose_frame(const PreparedCharacter& pc, std::span<const Mat4> g, const Mat4
   f.lbs_world.resize(n3);
   linear_blend_skinning(ch.mesh, f.skinning, f.lbs_world);
   f.lbs.resize(n3);
-  apply_normalisation(pc.norm, f.lbs_world, f.lbs);
+  apply_normalisation(pc.normalisation, f.lbs_world, f.lbs);
 
   // The root frame: undo the root's motion (rigid; the root's rest placement
   // is where training poses keep it).
@@ -57,14 +57,14 @@ void pose_frame(const PreparedCharacter& pc, std::span<const Mat4> g, const Mat4
   const float* w = f.lbs_world.data();
 #pragma omp parallel for schedule(static) if (!SerialRegion::active())
   for (std::int64_t v = 0; v < n; ++v) {
-    const Vec3 q = apply_normalisation(pc.norm, transform_point(f.to_root, {w[3 * v], w[3 * v + 1], w[3 * v + 2]}));
+    const Vec3 q = apply_normalisation(pc.normalisation, transform_point(f.to_root, {w[3 * v], w[3 * v + 1], w[3 * v + 2]}));
     for (int c = 0; c < 3; ++c) f.lbs_root[std::size_t(3 * v + c)] = q[std::size_t(c)];
   }
   f.normals.resize(n3);
   vertex_normals(f.lbs_root, ch.mesh.triangles, f.normals, normals_scratch);
   f.joints.resize(J);
   for (std::size_t j = 0; j < J; ++j)
-    f.joints[j] = apply_normalisation(pc.norm, transform_point(f.to_root, mat4_translation(g[j])));
+    f.joints[j] = apply_normalisation(pc.normalisation, transform_point(f.to_root, mat4_translation(g[j])));
 }
 
 namespace {
@@ -126,10 +126,10 @@ Vec3 root_offset_to_world(const Mat4& m, const Vec3& d) {
 
 Tensor neuroskinning_rest_features(const PreparedCharacter& pc, std::span<const std::int32_t> vertices) {
   const Character& ch = pc.character;
-  const std::vector<float> rest = apply_normalisation(pc.norm, ch.mesh.positions);
+  const std::vector<float> rest = apply_normalisation(pc.normalisation, ch.mesh.positions);
   const std::vector<float> normals = vertex_normals(rest, ch.mesh.triangles);
   std::vector<Vec3> joints = joint_positions(global_transforms(ch.skeleton, pc.rest));
-  for (Vec3& j : joints) j = apply_normalisation(pc.norm, j);
+  for (Vec3& j : joints) j = apply_normalisation(pc.normalisation, j);
   const std::int64_t m = static_cast<std::int64_t>(vertices.size());
   std::vector<float> p(3 * m), n(3 * m);
   for (std::int64_t i = 0; i < m; ++i) {

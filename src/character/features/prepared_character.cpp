@@ -22,8 +22,8 @@ PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& 
   const NormalisationStats n0 = compute_normalisation(ch);
   PreparedCharacter pc;
   pc.character = to_world(ch, n0.bind_to_world);
-  pc.norm = compute_normalisation(pc.character);
-  pc.norm.bind_to_world = mat4_identity();  // already world (the rest-pose matrix is ~identity now)
+  pc.normalisation = compute_normalisation(pc.character);
+  pc.normalisation.bind_to_world = mat4_identity();  // already world (the rest-pose matrix is ~identity now)
   pc.delta_mush = delta_mush_bind(pc.character.mesh, params);
   pc.mesh_graph = graph_from_triangles(pc.character.mesh.num_vertices(), pc.character.mesh.triangles);
   pc.rest = bind_pose(pc.character.skeleton);
@@ -43,13 +43,13 @@ DetailHalves detail_halves(const PreparedCharacter& pc, std::span<const Mat4> sk
   for (const std::vector<float>& rest : pc.rest_details) {
     // World -> root frame, normalised: the root motion is rigid and the
     // normalisation a uniform scale, so vectors turn by to_root's rotation
-    // and scale by norm.scale.
+    // and scale by normalisation.scale.
     std::vector<float> r = skin_vectors(pc.character.mesh, skinning, rest);
     for (std::size_t v = 0; v < r.size() / 3; ++v) {
       const float* a = &r[3 * v];
       const float x = a[0], y = a[1], z = a[2];
       for (int c = 0; c < 3; ++c)
-        r[3 * v + c] = (to_root[c] * x + to_root[4 + c] * y + to_root[8 + c] * z) * pc.norm.scale;
+        r[3 * v + c] = (to_root[c] * x + to_root[4 + c] * y + to_root[8 + c] * z) * pc.normalisation.scale;
     }
     h.rest.push_back(std::move(r));
   }
@@ -58,7 +58,7 @@ DetailHalves detail_halves(const PreparedCharacter& pc, std::span<const Mat4> sk
 
 std::int32_t root_motion_joint(const PreparedCharacter& pc) {
   const Skeleton& sk = pc.character.skeleton;
-  std::int32_t j = pc.norm.origin_joint >= 0 && pc.norm.origin_joint < sk.num_joints() ? pc.norm.origin_joint : 0;
+  std::int32_t j = pc.normalisation.origin_joint >= 0 && pc.normalisation.origin_joint < sk.num_joints() ? pc.normalisation.origin_joint : 0;
   for (std::int32_t guard = 0; sk.parents[std::size_t(j)] >= 0 && guard < sk.num_joints(); ++guard)
     j = sk.parents[std::size_t(j)];
   return j;

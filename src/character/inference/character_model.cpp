@@ -10,42 +10,6 @@
 
 namespace gatcore::character {
 
-FeatureKind checkpoint_features(const models::CheckpointFile& f) {
-  const auto& md = f.metadata;
-  const auto task = [&] {
-    const auto it = md.find("config");
-    return it != md.end() ? models::ModelConfig::from_text(it->second).task : models::Task::displacement;
-  };
-  if (const auto it = md.find("features"); it != md.end()) {
-    // Exact names; a longer description starting with one (checkpoints of an
-    // interim version wrote the layout here) means the same.
-    if (it->second.rfind("neuroskinning", 0) == 0) return FeatureKind::neuroskinning;
-    if (it->second.rfind("densegats", 0) == 0) return FeatureKind::densegats;
-    return FeatureKind::tube;
-  }
-  if (!md.count("data_path")) return FeatureKind::tube;
-  return task() == models::Task::weights ? FeatureKind::neuroskinning : FeatureKind::densegats;
-}
-
-std::vector<int> checkpoint_distortion_scales(const models::CheckpointFile& f, const std::string& path) {
-  const auto it = f.metadata.find("distortion_scales");
-  if (it == f.metadata.end()) return {};
-  return parse_distortion_scales(it->second, path + ": metadata 'distortion_scales'");
-}
-
-int checkpoint_nearest_joints(const models::CheckpointFile& f, const std::string& path) {
-  const auto it = f.metadata.find("joint_columns");
-  return it == f.metadata.end() ? 0 : parse_joint_columns(it->second, path + ": metadata 'joint_columns'");
-}
-
-const char* feature_kind_name(FeatureKind k) {
-  switch (k) {
-    case FeatureKind::neuroskinning: return "neuroskinning";
-    case FeatureKind::densegats: return "densegats";
-    default: return "tube";
-  }
-}
-
 std::vector<std::string> character_model_bones(const models::LoadedModel& m, const std::string& path,
                                                models::Task task) {
   const models::ModelConfig& cfg = m.model->config();
@@ -54,21 +18,19 @@ std::vector<std::string> character_model_bones(const models::LoadedModel& m, con
                 ", not one for ", models::task_name(task), " (use ",
                 weights ? "neuroskinning, neuroskinning-nopool, pointnet or fc" : "densegats, its ablations or origat",
                 ")");
-  const FeatureKind fk = checkpoint_features(m.file);
+  const ModelDescription d = read_model_description(m.file, path);
+  const FeatureKind fk = d.features;
   GATCORE_CHECK(fk != FeatureKind::tube, path,
                 ": was trained on the embedded tube data, whose features are not character features; train it on "
                 "a dataset (gat dataset build, gat train --data)");
   GATCORE_CHECK((fk == FeatureKind::neuroskinning) == weights, path, ": was trained on ", feature_kind_name(fk),
                 " features, not ", weights ? "neuroskinning" : "densegats", " features");
-  const auto it = m.file.metadata.find("skeleton");
-  GATCORE_CHECK(it != m.file.metadata.end() && !it->second.empty(), path,
+  GATCORE_CHECK(!d.skeleton.empty(), path,
                 ": the metadata has no 'skeleton' (the bone names the model was trained on)");
-  std::vector<std::string> bones;
-  std::stringstream ss(it->second);
-  for (std::string b; std::getline(ss, b, ',');) bones.push_back(b);
+  const std::vector<std::string>& bones = d.skeleton;
   const auto B = static_cast<std::int64_t>(bones.size());
-  const auto S = weights ? 0 : static_cast<std::int64_t>(checkpoint_distortion_scales(m.file, path).size());
-  const int K = weights ? 0 : checkpoint_nearest_joints(m.file, path);
+  const auto S = weights ? 0 : static_cast<std::int64_t>(d.distortion_scales.size());
+  const int K = weights ? 0 : d.nearest_joints;
   if (K > 0)
     GATCORE_CHECK(cfg.in_dim == 6 + K + 3 * S, path, ": the model takes ", cfg.in_dim, " features but its metadata "
                   "says ", K, " nearest joints and ", S, " distortion scales (expected 6 + ", K, " + 3 * ", S, ")");
@@ -126,46 +88,6 @@ Tensor features_in_bone_order(const Tensor& f, const BoneMapping& m) {
       if (m.joint_to_bone[j] >= 0) out.at(i, 6 + m.joint_to_bone[j]) = f.at(i, 6 + j);
   }
   return out;
-}
-
-BonePresence checkpoint_bone_presence(const models::CheckpointFile& f, const std::string& path,
-                                      std::size_t num_bones) {
-  BonePresence p;
-  const auto& md = f.metadata;
-  const auto c = md.find("bone_presence"), n = md.find("training_characters");
-  if (c == md.end() && n == md.end()) return p;
-  GATCORE_CHECK(c != md.end() && n != md.end(), path, ": metadata 'bone_presence' and 'training_characters' go together");
-  const auto num = [&](const std::string& field, const std::string& v) {
-    std::size_t end = 0;
-    long x = -1;
-    try {
-      x = std::stol(v, &end);
-    } catch (const std::exception&) {
-      end = 0;
-    }
-    GATCORE_CHECK(end == v.size() && !v.empty() && x >= 0 && x <= 100000000, path, ": metadata '", field,
-                  "': bad count '", v, "'");
-    return int(x);
-  };
-  p.characters = num("training_characters", n->second);
-  std::stringstream ss(c->second);
-  for (std::string item; std::getline(ss, item, ',');) {
-    p.count.push_back(num("bone_presence", item));
-    GATCORE_CHECK(p.count.back() <= p.characters, path, ": metadata 'bone_presence': ", p.count.back(),
-                  " characters of ", p.characters);
-  }
-  GATCORE_CHECK(p.count.size() == num_bones, path, ": metadata 'bone_presence' has ", p.count.size(), " counts for ",
-                num_bones, " bones");
-  return p;
-}
-
-std::string format_bone_presence(const std::vector<int>& count) {
-  std::string s;
-  for (std::size_t i = 0; i < count.size(); ++i) {
-    if (i) s += ',';
-    s += std::to_string(count[i]);
-  }
-  return s;
 }
 
 std::vector<std::string> unseen_absent_bones(const BoneMapping& m, const std::vector<std::string>& bones,

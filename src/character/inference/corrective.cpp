@@ -10,10 +10,10 @@
 
 namespace gatcore::character {
 
-CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
+CorrectiveBinding make_corrective_binding(const Character& ch, const std::vector<std::string>& bones,
                                             const BoneAliases& aliases, std::span<const int> distortion_scales,
                                             int nearest_joints) {
-  CorrectiveDeformer d;
+  CorrectiveBinding d;
   // No Delta Mush smoothing (iterations 0): only its one-ring adjacency is
   // used (distortion columns), with the mesh graph and the normalisation.
   d.prepared = prepare_character(ch, DeltaMushParams{0, 0.5f}, distortion_scales);
@@ -27,7 +27,7 @@ CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vect
   return d;
 }
 
-CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, const models::Normaliser& norm,
+CorrectedFrame deform_frame(const CorrectiveBinding& d, models::Model& model, const models::Normaliser& norm,
                             const Pose& pose) {
   GATCORE_CHECK(model.config().task == models::Task::displacement, d.prepared.character.name, ": ",
                 model.config().name, " predicts skin weights, not displacements");
@@ -54,12 +54,12 @@ CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, c
   f.lbs.resize(static_cast<std::size_t>(3 * n));
   f.corrected.resize(f.lbs.size());
   // Normalised p' = (p - origin) * scale: back to world units.
-  const float inv = 1.0f / pc.norm.scale;
+  const float inv = 1.0f / pc.normalisation.scale;
   for (std::int64_t v = 0; v < n; ++v) {
     // The model predicts in the root frame (frame_features.hpp).
     const Vec3 o = root_offset_to_world(frame.root_motion, {y.at(v, 0), y.at(v, 1), y.at(v, 2)});
     for (int c = 0; c < 3; ++c) {
-      const float l = frame.lbs[3 * v + c] * inv + pc.norm.origin[c];
+      const float l = frame.lbs[3 * v + c] * inv + pc.normalisation.origin[c];
       const float off = o[std::size_t(c)] * inv;
       GATCORE_CHECK(std::isfinite(off), s.name, ": the model predicted a non-finite offset at vertex ", v);
       f.lbs[3 * v + c] = l;

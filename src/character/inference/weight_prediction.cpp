@@ -67,7 +67,7 @@ WeightPrediction predict_skin_weights(models::Model& model, const models::Normal
 SkinWeights predict_skin_weights_any(models::Model& model, const models::Normaliser& norm,
                                      const PreparedCharacter& pc, int max_influences) {
   const models::ModelConfig& cfg = model.config();
-  GATCORE_CHECK(cfg.task == models::Task::weights && cfg.name == "skinweights-any", pc.character.name, ": ", cfg.name,
+  GATCORE_CHECK(cfg.task == models::Task::weights && models::any_skeleton(cfg.kind()), pc.character.name, ": ", cfg.name,
                 " is not the skeleton-agnostic skin-weight model (skinweights-any)");
   GATCORE_CHECK(max_influences >= 1, "predict_skin_weights_any: max_influences must be >= 1, got ", max_influences);
   const int k = static_cast<int>(cfg.out_dim);

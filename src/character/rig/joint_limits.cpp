@@ -14,6 +14,7 @@
 #include "gatcore/character/rig/bone_axis.hpp"
 #include "gatcore/character/rig/pose.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
+#include "gatcore/character/rig/vec3.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -69,12 +70,6 @@ FlexionRange parse_flex(const nlohmann::json& j, const std::string& source, cons
   f.lo = lo;
   f.hi = hi;
   return f;
-}
-
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-float dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
 
 nlohmann::json limit_json(const JointLimit& l) {

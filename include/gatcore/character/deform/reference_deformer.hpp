@@ -23,9 +23,11 @@ const char* reference_kind_name(ReferenceKind k);  // "delta_mush", "arap", "fil
 // Throws InvalidArgument naming `what` for an unknown name.
 ReferenceKind parse_reference_kind(const std::string& name, const std::string& what);
 
-class ReferenceDeformer {
+// The reference deformer of a character: the target positions of a pose
+// (not a deformer a model plays back: that is inference/corrective.hpp).
+class ReferenceTargets {
  public:
-  virtual ~ReferenceDeformer() = default;
+  virtual ~ReferenceTargets() = default;
   virtual ReferenceKind kind() const = 0;
   // The target positions ([3 n], the prepared character's world frame) of a
   // pose whose LBS positions are `lbs_world`. `frame`: the file target's
@@ -35,9 +37,9 @@ class ReferenceDeformer {
   virtual std::int32_t num_frames() const { return 0; }
 };
 
-std::shared_ptr<const ReferenceDeformer> delta_mush_reference(const Mesh& mesh, const DeltaMushParams& params);
-std::shared_ptr<const ReferenceDeformer> arap_reference(const Mesh& mesh, const ArapParams& params);
+std::shared_ptr<const ReferenceTargets> delta_mush_reference(const Mesh& mesh, const DeltaMushParams& params);
+std::shared_ptr<const ReferenceTargets> arap_reference(const Mesh& mesh, const ArapParams& params);
 // `frames`: [frames][3 n] target positions in the prepared character's world frame.
-std::shared_ptr<const ReferenceDeformer> file_reference(std::vector<std::vector<float>> frames, std::string source);
+std::shared_ptr<const ReferenceTargets> file_reference(std::vector<std::vector<float>> frames, std::string source);
 
 }  // namespace gatcore::character

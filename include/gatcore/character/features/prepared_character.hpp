@@ -26,7 +26,7 @@ Character to_world(const Character& ch, const Mat4& bind_to_world);
 
 struct PreparedCharacter {
   Character character;  // world frame (to_world)
-  NormalisationStats norm;  // of the world-frame character (bind_to_world = identity)
+  NormalisationStats normalisation;  // of the world-frame character (bind_to_world = identity); not the feature statistics (models::Normaliser)
   DeltaMush delta_mush;
   CsrGraph mesh_graph;  // mesh edges + self-loops
   Pose rest;            // bind pose of the world-frame character
@@ -37,7 +37,7 @@ struct PreparedCharacter {
   // Training only (data/): the targets' reference deformer when it is not
   // the Delta Mush binding above (ARAP, or file targets with the pose of each
   // of their frames); null: Delta Mush.
-  std::shared_ptr<const ReferenceDeformer> reference;
+  std::shared_ptr<const ReferenceTargets> reference;
   std::vector<Pose> target_poses;
 };
 PreparedCharacter prepare_character(const Character& ch, const DeltaMushParams& params = {},

@@ -7,27 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/character/inference/model_description.hpp"
 #include "gatcore/character/rig/skeleton.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/tensor.hpp"
 
 namespace gatcore::character {
-
-// The node features a checkpoint was trained on (metadata "features";
-// checkpoints written before that key: a dataset's features if it records a
-// data_path, else the embedded tube's).
-enum class FeatureKind { tube, neuroskinning, densegats };
-FeatureKind checkpoint_features(const models::CheckpointFile& f);
-const char* feature_kind_name(FeatureKind k);
-// The DenseGATs detail-distortion scales a checkpoint was trained with
-// (metadata "distortion_scales"; absent: none, the paper's features).
-std::vector<int> checkpoint_distortion_scales(const models::CheckpointFile& f, const std::string& path);
-
-// The joint columns of a displacement checkpoint (metadata "joint_columns":
-// "bones", the paper's, or "nearest:K", any skeleton; absent: "bones"):
-// 0 or K (features/nearest_joints.hpp).
-int checkpoint_nearest_joints(const models::CheckpointFile& f, const std::string& path);
 
 // Checks that the checkpoint `path` holds a model of `task` trained on
 // character features (not the embedded tube) and returns its bones (metadata
@@ -54,20 +40,6 @@ BoneMapping map_bones(const Skeleton& s, const std::vector<std::string>& bones, 
 // [n, 6 + J] features in the character's joint order -> [n, 6 + B] in the
 // model's bone order (bones the character lacks: 0), as in training.
 Tensor features_in_bone_order(const Tensor& f, const BoneMapping& m);
-
-// How many of a model's training characters had each of its bones
-// (checkpoint metadata "bone_presence": counts in "skeleton" order, and
-// "training_characters"). Written by gat train for bone-column models.
-struct BonePresence {
-  std::vector<int> count;  // [bones]; empty: not recorded (older checkpoints)
-  int characters = 0;
-};
-// Reads it; empty when the keys are absent. Throws InvalidArgument naming
-// `path` when they are malformed or their length is not num_bones.
-BonePresence checkpoint_bone_presence(const models::CheckpointFile& f, const std::string& path,
-                                      std::size_t num_bones);
-// The metadata value: the counts joined by commas.
-std::string format_bone_presence(const std::vector<int>& count);
 
 // The model's bones this character lacks although every training character
 // had them: their columns read 0 ("absent"), an input the model never saw in

@@ -15,7 +15,8 @@
 
 namespace gatcore::character {
 
-struct CorrectiveDeformer {
+// A character bound to a displacement model's bones and features, ready for deform_frame.
+struct CorrectiveBinding {
   PreparedCharacter prepared;  // world frame; poses are of prepared.character.skeleton
   BoneMapping mapping;         // joints -> the model's bones (empty with nearest-joint columns)
   std::int64_t num_bones = 0;
@@ -24,7 +25,7 @@ struct CorrectiveDeformer {
 // `distortion_scales`: those the model was trained with (checkpoint_distortion_scales);
 // `nearest_joints`: checkpoint_nearest_joints (0: map the joints onto `bones`
 // by name; K: any skeleton, `bones` and `aliases` unused).
-CorrectiveDeformer make_corrective_deformer(const Character& ch, const std::vector<std::string>& bones,
+CorrectiveBinding make_corrective_binding(const Character& ch, const std::vector<std::string>& bones,
                                             const BoneAliases& aliases = {}, std::span<const int> distortion_scales = {},
                                             int nearest_joints = 0);
 
@@ -36,7 +37,7 @@ struct CorrectedFrame {
 // LBS of `pose`, DenseGATs features of the posed mesh (normalised, the model's
 // bone order), the model's prediction on the whole mesh (on the model's
 // device), converted from normalised units back to the character's.
-CorrectedFrame deform_frame(const CorrectiveDeformer& d, models::Model& model, const models::Normaliser& norm,
+CorrectedFrame deform_frame(const CorrectiveBinding& d, models::Model& model, const models::Normaliser& norm,
                             const Pose& pose);
 
 }  // namespace gatcore::character

@@ -1,14 +1,12 @@
 #include "eval_weight_baseline.hpp"
 #include "cli_options.hpp"
 
-#include <chrono>
 #include <cstdio>
-#include <filesystem>
 
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/eval/own_joint_weight_eval.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
-#include "gatcore/character/inference/weight_prediction.hpp"
 #include "progress.hpp"
 
 using namespace gatcore;
@@ -51,7 +49,6 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     eo.min_weight = min_weight > 0 ? float(min_weight) : 0.0f;
     model->model->fold_batch_norm();
   }
-  const std::int32_t B = td.super.num_bones();
   const std::string label =
       model && heat_blend > 0 ? method + "+heat" + number_text(double(heat_blend)) : method;
   if (model)
@@ -62,32 +59,21 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
   else
     std::printf("gat eval: bone heat (top %d, min weight %.3g) on the %zu %s characters of %s\n", bp.max_influences,
                 double(bp.min_weight), chars.size(), part.c_str(), data.c_str());
-  std::vector<character::CharacterWeightEval> per;
   Progress progress("evaluating " + part + " characters", std::int64_t(chars.size()), "characters", quiet);
-  for (const std::int32_t c : chars) {
-    progress.update(std::int64_t(per.size()));
-    const character::PreparedCharacter& pc = td.characters[std::size_t(c)];
-    const auto& j2b = td.super.joint_to_bone[std::size_t(c)];
-    const auto t0 = std::chrono::steady_clock::now();
-    // The mix's bone heat: the baseline's own settings (top 4, min weight 0.01).
-    const character::SkinWeights w =
-        model ? character::mix_with_bone_heat(
-                    pc.character, character::predict_skin_weights_any(*model->model, model->norm, pc, bp.max_influences),
-                    heat_blend)
-              : character::bone_heat_weights(pc.character, bp);
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const std::vector<float> pred = character::super_weights(w, j2b, B);
-    const std::vector<float> truth = character::super_weights(pc.character.mesh.weights, j2b, B);
-    auto r = character::evaluate_character_weights(pc, pred, truth, B, j2b, td.super.mask[std::size_t(c)], eo, c);
-    const std::string& entry = td.description.characters[std::size_t(c)];
-    const std::filesystem::path f(entry);
-    r.name = entry.rfind("procedural:", 0) == 0 ? entry : f.parent_path().filename().string() + "/" + f.stem().string();
-    progress.finish();  // the character's line replaces it
-    if (!quiet)
-      std::printf("  %s: %lld vertices, %d joints, %.2f s\n", r.name.c_str(), static_cast<long long>(r.vertices),
-                pc.character.skeleton.num_joints(), s);
-    per.push_back(std::move(r));
-  }
+  progress.update(0);
+  character::OwnJointMethod how;
+  if (model) how.model = model->model.get(), how.norm = &model->norm, how.heat_blend = heat_blend;
+  how.bone_heat = bp;
+  std::int64_t evaluated = 0;
+  const std::vector<character::CharacterWeightEval> per = character::evaluate_own_joint_weights(
+      td, p, how, eo, [&](const character::CharacterWeightEval& r, double seconds, int joints) {
+        progress.finish();  // the character's line replaces it
+        if (!quiet)
+          std::printf("  %s: %lld vertices, %d joints, %.2f s\n", r.name.c_str(), static_cast<long long>(r.vertices),
+                      joints, seconds);
+        progress.update(++evaluated);
+      });
+  progress.finish();
   print_weight_table(per, eo, model ? label : std::string("bone-heat"), json_path, confusions);
   return 0;
 }

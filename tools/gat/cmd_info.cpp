@@ -187,7 +187,7 @@ void print_model(const std::string& path) {
     features += ", joint columns " + jc + " (each vertex's nearest joints: any skeleton)";
   if (const std::string scales = metadata(l.file, "distortion_scales", ""); !scales.empty())
     features += " + detail distortion at smoothing scales " + scales;
-  if (c.name == "skinweights-any")
+  if (gatcore::models::any_skeleton(c.kind()))
     features += gatcore::character::ignores_world_columns(l.norm)
                     ? "; the vertex's world-frame position and normal ignored (--world-columns ignore): the same "
                       "weights whichever way a character faces"

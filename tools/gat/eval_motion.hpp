@@ -1,10 +1,8 @@
 #pragma once
-// `gat eval --motion M.bvh ...`: DenseGATs-style evaluation of displacement
-// models and the LBS / DQS baselines against the dataset's reference deformer
-// (Delta Mush / ARAP on LBS, or the characters' file targets), over every frame of retargeted test motions on the
-// dataset's test characters; Markdown / JSON tables, error colour maps and
-// loss curves. Called by gat eval (cmd_eval.cpp, which declares the options)
-// when --motion is given.
+// `gat eval --motion M.bvh ...` / `--targets`: the options of the motion
+// evaluation (character/eval/motion_eval.hpp, which computes the tables),
+// its log, tables and files. Called by gat eval (cmd_eval.cpp, which declares
+// the options) when --motion or --targets is given.
 #include <string>
 #include <vector>
 

@@ -19,6 +19,7 @@
 #include "cli_util.hpp"
 #include "commands.hpp"
 #include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/inference/model_description.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/data/training_data.hpp"
@@ -27,6 +28,7 @@
 #include "gatcore/models/distill.hpp"
 #include "gatcore/models/linear_skip.hpp"
 #include "gatcore/models/train.hpp"
+#include "gatcore/train/training_run.hpp"
 #include "progress.hpp"
 
 using namespace gatcore;
@@ -57,18 +59,19 @@ int run_distill(const DistillArgs& a) {
   LoadedModel teacher = load_checkpoint(teacher_path);
   const std::vector<std::string> bones =
       character::character_model_bones(teacher, teacher_path, Task::displacement);  // checks the kind
-  const auto& md = teacher.file.metadata;
+  // The student applies to characters as its teacher does: its features, bones and training set.
+  character::ModelDescription description = character::read_model_description(teacher.file, teacher_path);
   if (data.empty()) {
-    GATCORE_CHECK(md.count("data_path"), teacher_path, ": no data_path in the metadata; give --data");
-    data = md.at("data_path");
+    GATCORE_CHECK(!description.data_path.empty(), teacher_path, ": no data_path in the metadata; give --data");
+    data = description.data_path;
   }
   const character::TrainingData td = [&] {
     Progress loading("preparing the characters of " + data, 0, "characters", a.common.quiet);
     character::TrainingData t = character::load_training_data(data, loading.callback());
-    t.nearest_joints = character::checkpoint_nearest_joints(teacher.file, teacher_path);  // the student's too
+    t.nearest_joints = description.nearest_joints;  // the student's too
     return t;
   }();
-  GATCORE_CHECK(td.nearest_joints > 0 || character::joined_bone_names(td.super) == md.at("skeleton"), data,
+  GATCORE_CHECK(td.nearest_joints > 0 || td.super.names == description.skeleton, data,
                 ": its super skeleton differs from the one ", teacher_path, " was trained on");
   GATCORE_CHECK(td.feature_dim(Task::displacement) == teacher.model->config().in_dim, data, ": ",
                 td.feature_dim(Task::displacement), " features per vertex, ", teacher_path, " takes ",
@@ -112,19 +115,15 @@ int run_distill(const DistillArgs& a) {
   opt.lr = float(lr);
   Trainer trainer(*student, opt, norm);
 
-  std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
-                                           {"features", "densegats"},
-                                           {"data", "dataset"},
-                                           {"data_path", std::filesystem::absolute(data).string()},
-                                           {"data_hash", td.hash},
-                                           {"skeleton", md.at("skeleton")},
-                                           {"distortion_scales", character::format_distortion_scales(
-                                                                     td.description.distortion_scales)},
-                                           {"joint_columns", character::format_joint_columns(td.nearest_joints)},
-                                           {"distilled_from", std::filesystem::absolute(teacher_path).string()},
-                                           {"distill_hard", std::to_string(hard)}};
-  for (const char* k : {"bone_presence", "training_characters"})  // the teacher's training set, the student's too
-    if (md.count(k)) extra[k] = md.at(k);
+  description.features = character::FeatureKind::densegats;
+  description.data_path = std::filesystem::absolute(data).string();
+  description.data_hash = td.hash;
+  description.distortion_scales = td.description.distortion_scales;
+  description.nearest_joints = td.nearest_joints;
+  description.world_columns_ignored.reset();
+  description.feature_layout.clear();
+  std::map<std::string, std::string> extra = character::model_description_metadata(description);
+  extra.merge(train::distillation_metadata(seed, teacher_path, hard));
   if (!quiet)
     std::printf("gat distill: %s (%lld parameters) imitating %s (%s, %lld parameters) on %s: %zu training / %zu "
               "validation samples, ground-truth weight %g, %d threads\n",

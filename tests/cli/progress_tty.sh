@@ -1,5 +1,5 @@
 #!/bin/sh
-# The progress line of every long `gat` command (examples/gat/progress.hpp):
+# The progress line of every long `gat` command (tools/gat/progress.hpp):
 # drawn in place ("\r\033[K what: done/total ...") on stderr when it is a
 # terminal, never with --quiet, never into a pipe or a file (logs get only
 # the summaries). Run by ctest (gat_progress_tty) in the build directory

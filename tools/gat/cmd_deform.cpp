@@ -63,8 +63,8 @@ int run(const DeformArgs& a) {
   const Character ch = load_character(in);
   const Motion motion = load_motion(motion_path);
   const int nearest = checkpoint_nearest_joints(lm.file, model_path);
-  const CorrectiveDeformer d =
-      make_corrective_deformer(ch, bones, aliases, checkpoint_distortion_scales(lm.file, model_path), nearest);
+  const CorrectiveBinding d =
+      make_corrective_binding(ch, bones, aliases, checkpoint_distortion_scales(lm.file, model_path), nearest);
   RetargetOptions ro;  // --alias names joints for the retarget too (JOINT=PART or a known joint name)
   ro.target_name = in;
   ro.source_aliases = ro.target_aliases = aliases;

@@ -19,9 +19,11 @@
 #include "cli_util.hpp"
 #include "commands.hpp"
 #include "gatcore/character/data/bone_candidate_samples.hpp"
+#include "gatcore/character/data/dataset_model_description.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/inference/model_description.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "progress.hpp"
@@ -29,6 +31,7 @@
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/train.hpp"
 #include "gatcore/models/linear_skip.hpp"
+#include "gatcore/train/training_run.hpp"
 #include "gatcore/vulkan.hpp"
 #include "tube_data.hpp"
 
@@ -222,15 +225,13 @@ int run_train(TrainArgs a) {
   }
   const Device dev = gat::device_from_flag(a.common.device, "train");
 
-  if (!init.empty() && data.empty()) {
-    std::fprintf(stderr, "gat train: --init %s fine-tunes on a dataset: give --data\n", init.c_str());
+  train::RunRequest request{resume, init, data, loss, linear_skip, a.pair_scorer, a.world_columns,
+                            a.architecture_flags, keep_best_by};
+  const auto refuse = [](const std::string& why) {
+    std::fprintf(stderr, "gat train: %s\n", why.c_str());
     return 2;
-  }
-  if (!init.empty() && !a.architecture_flags.empty()) {
-    std::fprintf(stderr, "gat train: --init %s: the model, its task, loss, linear skip and columns come from the "
-                         "checkpoint (drop %s)\n", init.c_str(), a.architecture_flags.front().c_str());
-    return 2;
-  }
+  };
+  if (const std::string why = train::check_request(request); !why.empty()) return refuse(why);
   // The checkpoint the model comes from: a resumed run's or a fine-tuned one's.
   const std::string from = resume.empty() ? init : resume;
   std::unique_ptr<Model> model;
@@ -245,32 +246,14 @@ int run_train(TrainArgs a) {
   if (!resume.empty()) {
     // The run's data and batching come from the checkpoint, so the resumed
     // run continues exactly where the interrupted one stopped.
-    const auto& md = loaded.file.metadata;
-    if (md.count("seed") && md.count("samples") && md.count("batch")) {
-      seed = std::stol(md.at("seed"));
-      samples = std::stol(md.at("samples"));
-      batch = std::stol(md.at("batch"));
-      if (md.count("sample_vertices")) sample_vertices = std::stol(md.at("sample_vertices"));
-      if (md.count("sampling")) a.sampling = md.at("sampling");
-    }
-    // A resumed run keeps the precision asked for (a bad value in the file
-    // is refused here, naming the checkpoint and the key).
-    for (const char* key : {"precision_requested", "precision"})
-      if (a.precision.empty() && md.count(key)) {
-        parse_precision(md.at(key), (a.resume + ": metadata " + key).c_str());
-        a.precision = md.at(key);
-      }
-    if (a.lr_schedule.empty() && md.count("lr_schedule")) {
-      schedule_from_name(md.at("lr_schedule"), (a.resume + ": metadata lr_schedule").c_str());
-      a.lr_schedule = md.at("lr_schedule");
-    }
-    if (md.count("data_path")) {
-      if (data.empty()) data = md.at("data_path");
-    } else if (!data.empty()) {
-      std::fprintf(stderr, "gat train: %s was trained on the embedded tube data, not a dataset; drop --data\n",
-                   resume.c_str());
-      return 2;
-    }
+    const train::RunSettings s = train::resumed_settings(
+        loaded.file, resume, {seed, samples, batch, sample_vertices, a.sampling, a.precision, a.lr_schedule});
+    seed = s.seed, samples = s.samples, batch = s.batch, sample_vertices = s.sample_vertices;
+    a.sampling = s.sampling, a.precision = s.precision, a.lr_schedule = s.lr_schedule;
+    const std::string trained_on = character::read_model_description(loaded.file, resume).data_path;
+    if (const std::string why = train::check_resumed_data(resume, trained_on, data); !why.empty()) return refuse(why);
+    if (data.empty()) data = trained_on;
+    request.data = data;
   }
   std::unique_ptr<character::TrainingData> td;
   if (!data.empty()) {
@@ -281,91 +264,37 @@ int run_train(TrainArgs a) {
     if (resume.empty() && !samples_set) samples = 0;
     if (from.empty()) td->nearest_joints = character::parse_joint_columns(joint_columns, "--joint-columns");
     if (!from.empty()) {
-      const auto& md = loaded.file.metadata;
-      if (!resume.empty() && md.count("data_hash") && md.at("data_hash") != td->hash) {
-        std::fprintf(stderr, "gat train: %s has changed since %s was trained on it (hash %s, checkpoint %s)\n",
-                     data.c_str(), resume.c_str(), td->hash.c_str(), md.at("data_hash").c_str());
-        return 2;
-      }
-      td->nearest_joints = character::checkpoint_nearest_joints(loaded.file, from);
-      if (!joint_columns.empty() &&
-          character::parse_joint_columns(joint_columns, "--joint-columns") != td->nearest_joints) {
-        std::fprintf(stderr, "gat train: %s was trained with --joint-columns %s; a resumed run keeps it\n",
-                     resume.c_str(), character::format_joint_columns(td->nearest_joints).c_str());
-        return 2;
-      }
-      if (td->nearest_joints == 0 && md.count("skeleton") &&
-          md.at("skeleton") != character::joined_bone_names(td->super)) {
-        std::fprintf(stderr, "gat train: %s's super skeleton differs from the one %s was trained on\n", data.c_str(),
-                     from.c_str());
-        return 2;
-      }
+      const character::ModelDescription trained = character::read_model_description(loaded.file, from);
+      td->nearest_joints = trained.nearest_joints;
+      const int asked = joint_columns.empty() ? -1 : character::parse_joint_columns(joint_columns, "--joint-columns");
+      if (const std::string why = character::check_checkpoint_dataset(*td, data, trained, resume, from, asked);
+          !why.empty())
+        return refuse(why);
     }
+    request.nearest_joint_columns = td->nearest_joints > 0;
   }
   if (from.empty()) {
     ModelConfig cfg = ModelConfig::defaults(model_name, demo::kTubeFeatures);
     if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
-    if (td && td->nearest_joints > 0 && cfg.task != Task::displacement) {
-      std::fprintf(stderr, "gat train: --joint-columns applies to displacement models; %s learns skin weights "
-                           "(skinweights-any is the skin-weight model for any skeleton)\n", cfg.name.c_str());
-      return 2;
-    }
+    if (const std::string why = train::check_new_model_options(cfg, request); !why.empty()) return refuse(why);
     if (td) cfg.in_dim = td->feature_dim(cfg.task);
     cfg.out_dim = cfg.task == Task::weights ? (td ? td->super.num_bones() : demo::kTubeBones) : 3;
-    if (cfg.name == "skinweights-any") {  // its columns are each vertex's own nearest bones, not the super skeleton
-      if (!td) {
-        std::fprintf(stderr, "gat train: skinweights-any learns from a dataset's characters (--data)\n");
-        return 2;
-      }
+    if (any_skeleton(cfg.kind())) {  // its columns are each vertex's own nearest bones, not the super skeleton
       cfg.in_dim = character::bone_candidate_feature_dim(character::kDefaultCandidates);
       cfg.out_dim = character::kDefaultCandidates;
-      cfg.pair_scorer = a.pair_scorer;
       cfg.pair_features = character::kPairFeatures;
-    } else if (!a.pair_scorer.empty()) {
-      std::fprintf(stderr, "gat train: --pair-scorer applies to skinweights-any, not %s\n", cfg.name.c_str());
-      return 2;
     }
-    if (!loss.empty()) {
-      if (cfg.task == Task::weights) {
-        std::fprintf(stderr, "gat train: --loss applies to displacement models; %s learns skin weights (KL)\n",
-                     cfg.name.c_str());
-        return 2;
-      }
-      cfg.loss = loss == "l1" ? DisplacementLoss::l1 : DisplacementLoss::mse;
-    }
-    if (linear_skip) {
-      if ((cfg.name.rfind("densegats", 0) != 0 && cfg.name != "origat") || cfg.task != Task::displacement) {
-        std::fprintf(stderr, "gat train: --linear-skip applies to displacement models (the densegats family, origat), not %s\n",
-                     cfg.name.c_str());
-        return 2;
-      }
-      cfg.linear_skip = true;
-    }
+    train::apply_architecture_options(cfg, request);
     model = make_model(cfg, std::uint64_t(seed));
-  } else if (linear_skip && !model->config().linear_skip) {
-    std::fprintf(stderr, "gat train: %s was trained without --linear-skip; a resumed run keeps its architecture\n",
-                 resume.c_str());
-    return 2;
+  } else if (const std::string why = train::check_checkpoint_architecture(model->config(), request); !why.empty()) {
+    return refuse(why);
   }
   const ModelConfig& cfg = model->config();
-  if (!resume.empty() && !loss.empty() && loss != displacement_loss_name(cfg.loss)) {
-    std::fprintf(stderr, "gat train: %s was trained with the %s loss; a resumed run keeps it (drop --loss %s)\n",
-                 resume.c_str(), displacement_loss_name(cfg.loss), loss.c_str());
-    return 2;
-  }
-  if (!resume.empty() && !a.pair_scorer.empty() && a.pair_scorer != cfg.pair_scorer) {
-    std::fprintf(stderr, "gat train: %s has %s; a resumed run keeps its architecture (drop --pair-scorer)\n",
-                 resume.c_str(), cfg.pair_scorer.empty() ? "no pair scorer" : "another pair scorer");
-    return 2;
-  }
   // Before any sample is built: --keep-best's figure (the L1 only exists for skin weights).
-  if (keep_best_by.empty()) keep_best_by = cfg.task == Task::weights ? "l1" : "loss";
-  if (keep_best_by == "l1" && cfg.task != Task::weights) {
-    std::fprintf(stderr, "gat train: --keep-best-by l1 needs a skin-weight model; %s predicts displacements\n",
-                 cfg.name.c_str());
-    return 2;
-  }
-  const bool any_skeleton = cfg.name == "skinweights-any";
+  std::string keep_best_refusal;
+  keep_best_by = train::keep_best_figure(cfg, request, &keep_best_refusal);
+  if (!keep_best_refusal.empty()) return refuse(keep_best_refusal);
+  const bool any_skeleton = models::any_skeleton(cfg.kind());
   if (td && !any_skeleton) {
     GATCORE_CHECK(cfg.in_dim == td->feature_dim(cfg.task) &&
                       (cfg.task != Task::weights || cfg.out_dim == td->super.num_bones()),
@@ -397,20 +326,13 @@ int run_train(TrainArgs a) {
   // A fine-tuned model keeps the statistics its weights were trained with
   // (and its linear skip, trained along).
   if (from.empty()) norm = Normaliser::fit(train, cfg.task == Task::displacement);
-  if (any_skeleton) {
-    // A new model ignores the world-frame columns unless told to use them; a
-    // checkpoint's normaliser already says which it does.
-    if (from.empty() && a.world_columns != "use") character::ignore_world_columns(norm);
-    const bool ignores = character::ignores_world_columns(norm);
-    if (!from.empty() && !a.world_columns.empty() && (a.world_columns == "ignore") != ignores) {
-      std::fprintf(stderr, "gat train: --world-columns %s: %s %s them; a resumed or fine-tuned model keeps its own\n",
-                   a.world_columns.c_str(), from.c_str(), ignores ? "ignores" : "uses");
-      return 2;
-    }
-  } else if (!a.world_columns.empty()) {
-    std::fprintf(stderr, "gat train: --world-columns applies to skinweights-any, not %s\n", cfg.name.c_str());
-    return 2;
-  }
+  // A new skinweights-any model ignores the world-frame columns unless told to
+  // use them; a checkpoint's normaliser already says which it does.
+  if (any_skeleton && from.empty() && a.world_columns != "use") character::ignore_world_columns(norm);
+  if (const std::string why = train::check_world_columns(cfg, request, !from.empty(),
+                                                          any_skeleton && character::ignores_world_columns(norm));
+      !why.empty())
+    return refuse(why);
   if (from.empty() && cfg.linear_skip) {
     const LinearMap f = fit_linear_skip(*model, train, norm);
     if (!quiet)
@@ -464,69 +386,23 @@ int run_train(TrainArgs a) {
                 dev == Device::vulkan ? vulkan::current_device().name.c_str() : "cpu",
                 comm.size() > 1 ? (", " + std::to_string(comm.size()) + " MPI ranks (data parallel)").c_str() : "",
                 trainer.options().precision == Precision::bf16 ? ", bf16 products" : "");
-  std::map<std::string, std::string> extra{{"seed", std::to_string(seed)},
-                                           {"samples", std::to_string(samples)},
-                                           {"batch", std::to_string(opt.batch_size)},
-                                           {"sample_vertices", std::to_string(opt.sample_vertices)},
-                                           {"sampling", sampling_name(opt.sampling)},
-                                           {"precision", precision_name(trainer.options().precision)},
-                                           {"lr_schedule", schedule_name(opt.schedule)}};
-  if (trainer.options().precision != opt.precision) extra["precision_requested"] = precision_name(opt.precision);
-  // The node features a character command (predict-weights, deform) must
-  // compute for this model (character_model.hpp).
-  extra["features"] = td ? (any_skeleton ? "bone-candidates" : cfg.task == Task::weights ? "neuroskinning" : "densegats")
-                        : "tube";
+  // The checkpoint's metadata: the run (training_run.hpp) and what a character command
+  // (predict-weights, deform) needs to apply the model (model_description.hpp).
+  train::RunRecord run{seed,         samples,       opt.batch_size,
+                       opt.sample_vertices, opt.sampling, opt.schedule,
+                       trainer.options().precision, opt.precision};
+  if (td) train::record_init(run, init, init.empty() ? nullptr : &loaded.file, resume.empty() ? nullptr : &loaded.file);
+  character::ModelDescription description;
   if (td) {
-    extra["data"] = "dataset";
-    extra["data_path"] = std::filesystem::absolute(data).string();
-    extra["data_hash"] = td->hash;
-    if (!init.empty()) {  // where a fine-tuned model started (a resumed fine-tune keeps it)
-      extra["init"] = std::filesystem::absolute(init).string();
-      if (loaded.file.metadata.count("epoch")) extra["init_epoch"] = loaded.file.metadata.at("epoch");
-    } else if (!resume.empty()) {
-      for (const char* k : {"init", "init_epoch"})
-        if (loaded.file.metadata.count(k)) extra[k] = loaded.file.metadata.at(k);
-    }
-    extra["skeleton"] = character::joined_bone_names(td->super);
-    if (any_skeleton)  // for people reading the checkpoint; the normaliser is what predictions follow
-      extra["world_columns"] = character::ignores_world_columns(norm) ? "ignore" : "use";
-    if (!any_skeleton && td->nearest_joints == 0) {
-      // Which bones every training character had: a character lacking one of
-      // them feeds the model an input it never saw (gat deform and
-      // predict-weights warn, character_model.hpp).
-      std::vector<int> presence(std::size_t(td->super.num_bones()), 0);
-      const auto& part = td->part(character::DatasetPart::train);
-      for (std::int32_t c : part)
-        for (std::size_t b = 0; b < presence.size(); ++b) presence[b] += td->super.mask[std::size_t(c)][b] != 0;
-      extra["bone_presence"] = character::format_bone_presence(presence);
-      extra["training_characters"] = std::to_string(part.size());
-    }
-    if (cfg.task == Task::displacement) {
-      extra["distortion_scales"] = character::format_distortion_scales(td->description.distortion_scales);
-      extra["joint_columns"] = character::format_joint_columns(td->nearest_joints);
-    }
-    // For people reading the checkpoint: the feature layout ("features" above
-    // is the key predict-weights / deform dispatch on); the columns follow "skeleton" (bone names normalised by
-    // character::normalise_bone_name), the statistics are norm.mean / norm.inv_std.
-    extra["feature_layout"] = any_skeleton
-                            ? "bone-candidates: rest position (3), rest normal (3), then per each vertex's nearest "
-                              "bones (out_dim of them, nearest first) 10 bone-relative columns "
-                              "(character/features/bone_candidates.hpp); outputs: those bones"
-                            : cfg.task == Task::weights
-                            ? "neuroskinning: rest position (3), rest normal (3), distance to each skeleton bone "
-                              "segment; world frame, hips at the origin, height 1 (character::compute_normalisation)"
-                            : td->nearest_joints > 0
-                            ? "densegats, nearest joints: posed position (3), posed normal (3), distances to the "
-                              "vertex's joint_columns K nearest joints, nearest first (any skeleton; "
-                              "character/features/nearest_joints.hpp), then 3 per distortion scale; root frame, "
-                              "normalised like neuroskinning"
-                            : "densegats: posed position (3), posed normal (3), distance to each skeleton joint, "
-                              "then 3 per distortion scale (character/deform/detail_distortion.hpp); root frame, "
-                              "normalised like neuroskinning";
+    description = character::describe_dataset_model(*td, data, cfg, norm);
   } else {
-    extra["data"] = "embedded tube character";
-    extra["skeleton"] = "upper_arm,forearm";
+    description.skeleton = {"upper_arm", "forearm"};
   }
+  const auto metadata = [&] {
+    std::map<std::string, std::string> md = train::training_run_metadata(run);
+    md.merge(character::model_description_metadata(description));
+    return md;
+  };
   std::vector<LossRecord> history;
   if (!resume.empty() && loaded.file.metadata.count("loss_history")) {
     history = gatcore::character::parse_history(loaded.file.metadata.at("loss_history"), resume);
@@ -590,7 +466,8 @@ int run_train(TrainArgs a) {
     const bool validate = last || (trainer.epoch() + 1) % val_every == 0;
     const EpochStats st = trainer.run_epoch(train, validate ? val : std::vector<Sample>{}, progress);
     history.push_back({st.epoch, st.train_loss, st.val_loss, double(st.lr), st.seconds, st.val_l1, st.val_dominant});
-    extra["loss_history"] = gatcore::character::format_history(history);
+    run.loss_history = gatcore::character::format_history(history);
+    const std::map<std::string, std::string> extra = metadata();
     if (root) {  // every rank holds the same model; one writes it
       save_checkpoint(out, *model, norm, &trainer, extra);
       gatcore::character::write_loss_outputs(history, curve);

@@ -1,5 +1,5 @@
 // See eval_motion.hpp.
-#include "eval_motion.hpp"
+#include "gatcore/character/eval/motion_eval.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -17,22 +17,20 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gatcore/atomic_file.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/inference/character_model.hpp"
-#include "gatcore/character/io/motion_source.hpp"
+#include "gatcore/character/inference/model_description.hpp"
 #include "gatcore/character/viz/render.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/train.hpp"
 #include "gatcore/models/linear_skip.hpp"
-#include "progress.hpp"
 
-using namespace gatcore;
-using namespace gatcore::character;
+namespace gatcore::character {
+
 using namespace gatcore::models;
 namespace fs = std::filesystem;
 
@@ -74,8 +72,6 @@ struct Acc {
   }
 };
 
-void write_atomic(const std::string& path, const std::string& text) { gatcore::write_file_atomic(path, text); }
-
 std::string stem(const std::string& p) { return fs::path(p).stem().string(); }
 
 // "Casual.glb" of "modular_men": "men/Casual".
@@ -92,47 +88,28 @@ std::string fmt(double v) {
   return b;
 }
 
-// The per-epoch losses of a `gat train` log.
-std::vector<std::vector<float>> read_losses(const std::string& path) {
-  std::ifstream f(path);
-  GATCORE_CHECK(f.good(), path, ": cannot open the training log");
-  std::vector<std::vector<float>> s(2);
-  std::string line;
-  while (std::getline(f, line)) {
-    int e = 0, n = 0;
-    float tr = 0, va = 0;
-    if (std::sscanf(line.c_str(), "epoch %d/%d train loss %f val loss %f", &e, &n, &tr, &va) == 4) {
-      s[0].push_back(tr);
-      s[1].push_back(va);
-    }
-  }
-  GATCORE_CHECK(!s[0].empty(), path, ": no 'epoch N/M  train loss X  val loss Y' lines");
-  return s;
-}
-
 }  // namespace
 
-int gat::eval_motion(const EvalMotionArgs& args) {
-  const std::string data = args.data, part = args.part, json_out = args.json, md_out = args.markdown,
-                    map_dir = args.errormaps;
-  const std::vector<std::string>& motion_paths = args.motions;
-  const std::vector<std::string>& loss_curves = args.loss_curves;
-  std::vector<std::pair<std::string, std::string>> model_args;  // label, file
-  const bool linear_probe = args.linear_probe;
-  const double max_excess_deg = args.max_limit_excess_deg;  // < 0: every frame
-  for (const std::string& v : args.models) {
-    const auto eq = v.find('=');
-    model_args.emplace_back(eq == std::string::npos ? std::string() : v.substr(0, eq),
-                            eq == std::string::npos ? v : v.substr(eq + 1));
-  }
-  const long stride = args.stride, map_frames = args.errormap_frames, map_size = args.errormap_size;
-  const double cm_per_unit = args.cm_per_unit;
+MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHooks& hooks) {
+  const std::string& data = o.data;
+  const std::string& part = o.part;
+  const std::string& map_dir = o.errormaps;
+  const std::vector<Motion>& motions = o.motions;
+  const bool linear_probe = o.linear_probe;
+  const double max_excess_deg = o.max_limit_excess_deg;  // < 0: every frame
+  const long stride = o.stride, map_frames = o.errormap_frames, map_size = o.errormap_size;
+  const double cm_per_unit = o.cm_per_unit;
+  const auto log = [&](const std::string& line) {
+    if (hooks.log) hooks.log(line);
+  };
+  const auto line = [](const char* format, auto... args) {
+    char b[512];
+    std::snprintf(b, sizeof b, format, args...);
+    return std::string(b);
+  };
   GATCORE_CHECK(!data.empty(), "--motion / --targets need --data DATASET");
-  GATCORE_CHECK(loss_curves.empty() || !map_dir.empty(), "--loss-curve writes into the --errormaps DIR; give one");
   const auto t0 = std::chrono::steady_clock::now();
-  gat::Progress loading("preparing the characters of " + data, 0, "characters", args.quiet);
-  TrainingData td = load_training_data(data, loading.callback());  // nearest_joints set per probe below
-  loading.finish();
+  TrainingData td = load_training_data(data, hooks.loading);  // nearest_joints set per probe below
   const std::string bones = joined_bone_names(td.super);
   struct M {
     std::string label, file;
@@ -140,27 +117,25 @@ int gat::eval_motion(const EvalMotionArgs& args) {
     int nearest = 0;  // its joint columns (checkpoint_nearest_joints)
   };
   std::vector<M> models_;
-  for (auto& [label, file] : model_args) {
+  for (const auto& [label, file] : o.models) {
     M m{label, file, load_checkpoint(file)};
     const ModelConfig& cfg = m.l.model->config();
     GATCORE_CHECK(cfg.task == Task::displacement, file, ": model '", cfg.name,
                   "' predicts skin weights; --motion evaluates displacement models");
-    m.nearest = checkpoint_nearest_joints(m.l.file, file);
+    const ModelDescription described = read_model_description(m.l.file, file);
+    m.nearest = described.nearest_joints;
     GATCORE_CHECK(cfg.in_dim == td.displacement_feature_dim(m.nearest), file, " takes ", cfg.in_dim,
                   " features; ", data, " has ", td.displacement_feature_dim(m.nearest), " (joint columns ",
                   format_joint_columns(m.nearest), ", distortion scales: ",
                   format_distortion_scales(td.description.distortion_scales), ")");
-    const auto& md = m.l.file.metadata;
     // Nearest-joint models name no bones: any dataset's skeletons will do.
-    if (m.nearest == 0 && md.count("skeleton") && md.at("skeleton") != bones)
-      throw InvalidArgument(detail::cat(file, ": trained on a super skeleton (", md.at("skeleton"),
+    if (m.nearest == 0 && !described.skeleton.empty() && described.skeleton != td.super.names)
+      throw InvalidArgument(detail::cat(file, ": trained on a super skeleton (", joined_bone_names(described.skeleton),
                                         ") that differs from ", data, "'s (", bones, ")"));
     if (m.label.empty()) m.label = cfg.name;
     m.l.model->fold_batch_norm();
     models_.push_back(std::move(m));
   }
-  std::vector<Motion> motions;
-  for (const auto& p : motion_paths) motions.push_back(load_motion(p));
   const auto dpart = part == "test" ? DatasetPart::test : part == "validation" ? DatasetPart::validation : DatasetPart::train;
   const auto& chars = td.part(dpart);
   GATCORE_CHECK(!chars.empty(), data, " has no ", part, " characters");
@@ -177,9 +152,8 @@ int gat::eval_motion(const EvalMotionArgs& args) {
       const std::string w = unseen_absent_bones_warning(
           character_label(td.description.characters[std::size_t(c)]), unseen_absent_bones(has, td.super.names, presence),
           presence);
-      if (!w.empty())
-        std::fprintf(stderr, "gat eval: %s (model %s; a model trained with --joint-columns nearest:K has no such columns).\n",
-                     w.c_str(), m.label.c_str());
+      if (!w.empty() && hooks.warn)
+        hooks.warn(w + " (model " + m.label + "; a model trained with --joint-columns nearest:K has no such columns).");
     }
   }
 
@@ -203,13 +177,13 @@ int gat::eval_motion(const EvalMotionArgs& args) {
       const auto tp = std::chrono::steady_clock::now();
       td.nearest_joints = layout;
       const std::vector<Sample> train = training_samples(td, Task::displacement, DatasetPart::train, 0);
-      GATCORE_CHECK(!train.empty(), "gat eval: --linear-probe: ", data, " has no training samples");
+      GATCORE_CHECK(!train.empty(), "--linear-probe: ", data, " has no training samples");
       Probe p{layout, {}, Normaliser::fit(train, true)};
       p.map = fit_linear_map(train, p.norm, td.feature_dim(Task::displacement), 3);
       const std::string label = layout > 0 ? "linear probe (" + format_joint_columns(layout) + ")" : "linear probe";
-      std::printf("  %s: %lld training vertices, normalised MSE %.5f (zero: %.5f), %.1f s\n", label.c_str(),
-                  static_cast<long long>(p.map.rows), p.map.mse_after, p.map.mse_before,
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - tp).count());
+      log(line("  %s: %lld training vertices, normalised MSE %.5f (zero: %.5f), %.1f s", label.c_str(),
+               static_cast<long long>(p.map.rows), p.map.mse_after, p.map.mse_before,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - tp).count()));
       methods.push_back(label);
       probes.push_back(std::move(p));
     }
@@ -233,8 +207,7 @@ int gat::eval_motion(const EvalMotionArgs& args) {
   std::int64_t total_frames = 0, done_frames = 0;
   for (const Motion& mo : motions)
     total_frames += std::int64_t((mo.clip.frames.size() + std::size_t(stride) - 1) / std::size_t(stride));
-  gat::Progress progress("evaluating " + part + " characters", total_frames * std::int64_t(chars.size()), "frames",
-                         args.quiet);
+  const std::int64_t all_frames = total_frames * std::int64_t(chars.size());
   for (std::int32_t c : chars) {
     const PreparedCharacter& pc = td.characters[std::size_t(c)];
     const std::string& entry = td.description.characters[std::size_t(c)];
@@ -243,7 +216,7 @@ int gat::eval_motion(const EvalMotionArgs& args) {
     const double cm = cm_per_unit > 0 ? cm_per_unit : (ext == ".glb" || ext == ".gltf") ? 100.0 : 0.0;
     all_cm = all_cm && cm > 0;
     common_cm = common_cm < 0 ? cm : (common_cm == cm ? cm : 0.0);
-    const double to_world = 1.0 / double(pc.norm.scale);
+    const double to_world = 1.0 / double(pc.normalisation.scale);
     const std::int64_t n = pc.character.mesh.num_vertices();
     Row chrow{character_label(entry), "all", 0, n, cm, std::vector<Acc>(K)};
     // A character with file targets is evaluated on their frames (the poses
@@ -276,10 +249,10 @@ int gat::eval_motion(const EvalMotionArgs& args) {
           map_at.push_back(frames[std::size_t((2 * k + 1) * frames.size() / std::size_t(2 * map_frames))]);
       const auto tc = std::chrono::steady_clock::now();
       for (std::size_t f : frames) {
-        progress.update(done_frames++, character_label(entry));
+        if (hooks.progress) hooks.progress(done_frames++, all_frames, character_label(entry));
         const Pose& pose = clip.frames[f];
         if (max_excess_deg >= 0 &&
-            pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits, pc.norm.origin_joint).radians > max_excess_deg * std::numbers::pi / 180.0) {
+            pose_limit_excess(pc.character.skeleton, pc.rest, pose, limits, pc.normalisation.origin_joint).radians > max_excess_deg * std::numbers::pi / 180.0) {
           ++row.excluded;
           continue;
         }
@@ -289,7 +262,7 @@ int gat::eval_motion(const EvalMotionArgs& args) {
         const std::vector<Mat4> g = global_transforms(pc.character.skeleton, pose);
         std::vector<Mat4> S(g.size());
         for (std::size_t j = 0; j < g.size(); ++j) S[j] = mul(g[j], pc.character.skeleton.inverse_bind[j]);
-        const std::vector<float> dqs = apply_normalisation(pc.norm, dual_quaternion_skinning(pc.character.mesh, S));
+        const std::vector<float> dqs = apply_normalisation(pc.normalisation, dual_quaternion_skinning(pc.character.mesh, S));
         std::vector<std::vector<float>> err(K, std::vector<float>(std::size_t(n)));
         std::vector<Tensor> preds;
         // The frame's input per joint-column layout, each made once (models
@@ -357,15 +330,13 @@ int gat::eval_motion(const EvalMotionArgs& args) {
           }
         }
       }
-      if (!args.quiet) {
-        progress.finish();
-        std::printf("  %-16s %-10s %4lld frames x %6lld vertices (%lld outside the limits left out, %.1f s):",
-                    row.character.c_str(), stem(row.motion).c_str(), static_cast<long long>(row.frames),
-                    static_cast<long long>(n), static_cast<long long>(row.excluded),
-                    std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
-        for (std::size_t k = 0; k < K; ++k) std::printf("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
-        std::printf("\n");
-        std::fflush(stdout);
+      if (hooks.row) {
+        std::string text = line("  %-16s %-10s %4lld frames x %6lld vertices (%lld outside the limits left out, %.1f s):",
+                                row.character.c_str(), stem(row.motion).c_str(), static_cast<long long>(row.frames),
+                                static_cast<long long>(n), static_cast<long long>(row.excluded),
+                                std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count());
+        for (std::size_t k = 0; k < K; ++k) text += line("  %s %.5f", methods[k].c_str(), row.acc[k].mean());
+        hooks.row(text);
       }
       for (std::size_t k = 0; k < K; ++k) chrow.acc[k].add(row.acc[k]);
       chrow.frames += row.frames;
@@ -380,16 +351,6 @@ int gat::eval_motion(const EvalMotionArgs& args) {
     }
     per_char.push_back(chrow);
   }
-  progress.finish();
-  for (const auto& lc : loss_curves) {
-    const auto eq = lc.find('=');
-    GATCORE_CHECK(eq != std::string::npos && eq > 0, "--loss-curve expects LABEL=LOG, got '", lc, "'");
-    const auto series = read_losses(lc.substr(eq + 1));
-    const std::string png = (fs::path(map_dir) / ("loss_" + lc.substr(0, eq) + ".png")).string();
-    write_png(png, plot_curves(series, 480, 300, true));
-    std::printf("  loss curve of %s (%zu epochs) -> %s\n", lc.substr(0, eq).c_str(), series[0].size(), png.c_str());
-  }
-
   // Report.
   auto stats_json = [&](const Acc& a, double cm) {
     nlohmann::json j = {{"mean", a.mean()}, {"p99", a.quantile(0.99)}, {"max", a.max}, {"min", a.min},
@@ -414,7 +375,7 @@ int gat::eval_motion(const EvalMotionArgs& args) {
     j["reference"] = {{"name", "delta_mush"}, {"iterations", td.description.delta_mush.iterations},
                       {"step", td.description.delta_mush.step}};
   if (!td.description.targets.empty()) j["reference"]["file_targets"] = td.description.targets.size();
-  j["motions"] = motion_paths;
+  j["motions"] = o.motion_paths;
   j["methods"] = methods;
   for (const auto& m : models_) {
     const auto& md = m.l.file.metadata;
@@ -478,9 +439,13 @@ int gat::eval_motion(const EvalMotionArgs& args) {
            << fmt(r.acc[k].max * s) << " / " << fmt(r.acc[k].min * s) << " |";
       md << "\n";
     }
-  if (!json_out.empty()) write_atomic(json_out, j.dump(2) + "\n");
-  if (!md_out.empty()) write_atomic(md_out, md.str());
-  std::printf("%s", md.str().c_str());
-  std::printf("gat eval: %zu methods on %zu characters in %.1f s\n", K, per_char.size(), secs);
-  return 0;
+  MotionEvalReport report;
+  report.methods = methods;
+  report.characters = per_char.size();
+  report.markdown = md.str();
+  report.json = j.dump(2) + "\n";
+  report.seconds = secs;
+  return report;
 }
+
+}  // namespace gatcore::character

@@ -1,5 +1,5 @@
 #!/bin/sh
-# The `gat` option conventions (examples/gat/cli_options.hpp): --opt=value,
+# The `gat` option conventions (tools/gat/cli_options.hpp): --opt=value,
 # gat --version, gat help CMD, the same help on --help, and one line on stderr
 # naming each missing or invalid argument (exit 2). Run by ctest
 # (gat_cli_conventions) in the build directory: cli_conventions.sh GAT VERSION.

@@ -143,7 +143,7 @@ int run(const PredictArgs& a) {
   Activity reading("reading the checkpoint " + model_path);
   stage("reading the checkpoint");
   models::LoadedModel lm = models::load_checkpoint(model_path);
-  if (lm.model->config().name == "skinweights-any") {
+  if (models::any_skeleton(lm.model->config().kind())) {
     // Skeleton-agnostic: each vertex's own nearest bones, no names to match.
     GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with skinweights-any (it matches no bone names)");
     stage("reading the character");

@@ -2,9 +2,14 @@
 
 #include <cmath>
 
+#include "gatcore/character/rig/vec3.hpp"
+
 namespace demo {
 
 namespace {
+using gatcore::character::add;
+using gatcore::character::distance;
+using gatcore::character::sub;
 constexpr float kPi = 3.14159265358979f;
 
 // Rotation R = Rx(bend) * Ry(twist) applied to v.
@@ -13,12 +18,6 @@ Vec3 rotate(const Vec3& v, float bend, float twist) {
   const Vec3 a{ct * v[0] + st * v[2], v[1], -st * v[0] + ct * v[2]};
   const float cb = std::cos(bend), sb = std::sin(bend);
   return {a[0], cb * a[1] - sb * a[2], sb * a[1] + cb * a[2]};
-}
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-float dist(const Vec3& a, const Vec3& b) {
-  const Vec3 d = sub(a, b);
-  return std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
 }
 }  // namespace
 
@@ -83,7 +82,7 @@ gatcore::Tensor node_features(const TubeCharacter& c, const std::vector<Vec3>& x
     for (int k = 0; k < 3; ++k) {
       f.at(i, k) = x[i][k];
       f.at(i, 3 + k) = len > 0.f ? nrm[i][k] / len : 0.f;
-      f.at(i, 6 + k) = dist(x[i], joints[k]);
+      f.at(i, 6 + k) = distance(x[i], joints[k]);
     }
   }
   return f;

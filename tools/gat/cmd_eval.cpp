@@ -167,10 +167,10 @@ int run_eval(const EvalArgs& a) {
   const Device dev = gat::device_from_flag(a.common.device, "eval");
   gat::Activity doing("evaluating " + path);
   LoadedModel l = load_checkpoint(path);
-  if (l.model->config().name == "skinweights-any") {
+  if (gatcore::models::any_skeleton(l.model->config().kind())) {
     // Each character's own joints (no super skeleton): the baselines' protocol.
-    if (data.empty() && l.file.metadata.count("data_path")) data = l.file.metadata.at("data_path");
-    return gat::eval_weight_baseline("skinweights-any", data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
+    if (data.empty()) data = character::read_model_description(l.file, path).data_path;
+    return gat::eval_weight_baseline(gatcore::models::model_kind_name(gatcore::models::ModelKind::skinweights_any), data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
                                       json_path, a.common.quiet, int(a.confusions), &l, float(a.heat_blend));
   }
   GATCORE_CHECK(a.heat_blend == 0, "--heat-blend: ", path, " is a ", l.model->config().name,
@@ -178,8 +178,8 @@ int run_eval(const EvalArgs& a) {
                 "joints; gat predict-weights --heat-blend works with every skin-weight model)");
   Model& m = *l.model;
   const ModelConfig& cfg = m.config();
-  const auto& md = l.file.metadata;
-  if (data.empty() && md.count("data_path")) data = md.at("data_path");
+  const character::ModelDescription described = character::read_model_description(l.file, path);
+  if (data.empty()) data = described.data_path;
   std::vector<Sample> samples_;
   std::unique_ptr<character::TrainingData> td_;
   if (!data.empty()) {
@@ -189,12 +189,13 @@ int run_eval(const EvalArgs& a) {
     }
     if (cfg.task == Task::displacement) td_->nearest_joints = character::checkpoint_nearest_joints(l.file, path);
     const character::TrainingData& td = *td_;
-    if (md.count("data_hash") && md.at("data_hash") != td.hash && md.count("data_path") && md.at("data_path") == data)
+    if (!described.data_hash.empty() && described.data_hash != td.hash && described.data_path == data)
       std::fprintf(stderr, "gat eval: warning: %s has changed since %s was trained on it\n", data.c_str(), path.c_str());
-    const std::string bones = character::joined_bone_names(td.super);
-    if (td.nearest_joints == 0 && md.count("data_path") && md.count("skeleton") && md.at("skeleton") != bones) {
+    if (td.nearest_joints == 0 && !described.data_path.empty() && !described.skeleton.empty() &&
+        described.skeleton != td.super.names) {
       std::fprintf(stderr, "gat eval: %s's super skeleton (%s) differs from the checkpoint's (%s)\n", data.c_str(),
-                   bones.c_str(), md.at("skeleton").c_str());
+                   character::joined_bone_names(td.super).c_str(),
+                   character::joined_bone_names(described.skeleton).c_str());
       return 2;
     }
     GATCORE_CHECK(cfg.in_dim == td.feature_dim(cfg.task) &&
