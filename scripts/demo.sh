@@ -72,7 +72,7 @@ echo
 echo "demo finished in $(( $(date +%s) - t0 )) s (after the build). Files in $(pwd):"
 echo "  character_weights.glb     the unseen character with predicted skin weights (open in Blender / any glTF viewer)"
 echo "  character_deformed.glb    + the swing motion, LBS + learned correction, as morph targets (animation 'deform')"
-echo "  character_deformed.pc2    the same as a point cache, Z-up, from frame 1 (Blender: Mesh Cache modifier, README)"
+echo "  character_deformed.pc2    the same as a point cache, Z-up, from frame 1 (Blender: Mesh Cache modifier, docs/getting-started.md)"
 echo "  img/*.png                 weight error of the unseen character; LBS vs the reference deformer"
 echo "  skin_weights.loss.png, corrective.loss.png   loss curves"
 echo "  skin_weights.gcm, corrective.gcm             the models (safetensors checkpoints)"

@@ -74,7 +74,7 @@ struct Stats {
 };
 Stats stats();
 
-// Drops the device copy of a graph (see the graph-cache rule in README: graphs
+// Drops the device copy of a graph (see the graph-cache rule in docs/library.md: graphs
 // are cached by address, node/edge counts and a content fingerprint; forget a
 // graph before mutating it in place and reusing it at the same address).
 void forget_graph(const void* graph);

@@ -163,7 +163,7 @@ Runner setup_deform(CLI::App& gat) {
           "(joints held at the bind pose; the file's own animations are kept and play the plain skinned mesh)");
   c.add_option("--point-cache", a->pc2,
                "OUT.pc2: the deformed vertices per frame as point caches, one per mesh object of the character "
-               "(OUT.pc2 for a single mesh, else OUT_<object>.pc2), in the object's own coordinates (README: "
+               "(OUT.pc2 for a single mesh, else OUT_<object>.pc2), in the object's own coordinates (docs/getting-started.md: "
                "Blender, Maya, Houdini)");
   c.add_option("--up", a->up,
                "the point caches' up axis: y (the file's, glTF's and Maya's) or z (Blender's and 3ds Max's: "

@@ -233,7 +233,7 @@ Runner setup_predict_weights(CLI::App& gat) {
                "S in [0, 1]: mix the model's weights with bone heat's, (1 - S) * model + S * bone heat per vertex, "
                "then keep the largest --max-influences (default 0: the model alone). A hedge for a character unlike "
                "every family the model was trained on: 0.3 lowered L1 on the unseen creatures and Khronos rigs "
-               "and cost on characters like the training ones (docs/RESULTS.md, issue #15)")
+               "and cost on characters like the training ones (docs/RESULTS.md)")
       ->check(number_in(0, 1));
   add_out(c, a->out, "the character with the predicted weights (.glb / .gltf; required)");
   c.add_option("--max-influences", a->k,

@@ -1,4 +1,4 @@
-// `gat train`: trains any model of issue 3 by name, with a progress line,
+// `gat train`: trains any model by name, with a progress line,
 // validation every epoch, a resumable checkpoint every epoch and Ctrl-C
 // handling. It trains on a dataset of the character pipeline (--data, see
 // character/data/training_data.hpp) or on the embedded tube character
