@@ -37,12 +37,12 @@ struct Fixture {
     cfg.modules = 1, cfg.blocks = 1, cfg.head = {16};
     auto m = models::make_model(cfg, 1);
     model = (dir / "dg.gcm").string();
-    models::save_checkpoint(model, *m, {}, nullptr, model_description_metadata(describe_dataset_model(td, data, cfg, {})));
+    models::save_checkpoint(model, *m, {}, model_description_metadata(describe_dataset_model(td, data, cfg, {})));
     models::ModelConfig wc = models::ModelConfig::defaults("neuroskinning", td.feature_dim(models::Task::weights),
                                                             td.super.num_bones());
     auto w = models::make_model(wc, 1);
     weights_model = (dir / "ns.gcm").string();
-    models::save_checkpoint(weights_model, *w, {}, nullptr,
+    models::save_checkpoint(weights_model, *w, {},
                             model_description_metadata(describe_dataset_model(td, data, wc, {})));
   }
   MotionEvalOptions options(long stride) const {
