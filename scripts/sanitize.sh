@@ -54,7 +54,7 @@ work="$(cd "$build" && pwd)/fuzz_run"  # absolute: each fuzzer runs inside it
 rm -rf "$work"
 "$build/tests/fuzz/make_corpus" "$build/tests/fuzz/corpus" >/dev/null
 total=0
-for f in checkpoint bvh pc2 gltf dataset; do
+for f in checkpoint bvh asf pc2 gltf dataset; do
   mkdir -p "$work/$f"
   cp "$build/tests/fuzz/corpus/$f"/* "$work/$f/"
   log="$work/$f.log"
