@@ -10,6 +10,7 @@
 #include <map>
 #include <set>
 
+#include "character_fixtures.hpp"
 #include "gatcore/character/data/augment.hpp"
 #include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/data/procedural.hpp"
@@ -67,6 +68,21 @@ void check_consistent(const Character& c) {
   }
   CHECK(worst <= 1e-4 * std::max(1.0, scale));
   CHECK(c.welded_from_file.size() == std::size_t(c.mesh.num_vertices()));
+}
+
+// The mesh skinned in the skeleton's rest pose (the file's node transforms).
+std::vector<float> rest_lbs(const Character& c) {
+  const auto m = skinning_matrices(c.skeleton, rest_pose(c.skeleton));
+  const auto& w = c.mesh.weights;
+  std::vector<float> out(c.mesh.positions.size(), 0.0f);
+  for (std::int64_t v = 0; v < c.mesh.num_vertices(); ++v) {
+    const Vec3 p{c.mesh.positions[3 * v], c.mesh.positions[3 * v + 1], c.mesh.positions[3 * v + 2]};
+    for (std::int64_t k = w.ptr[v]; k < w.ptr[v + 1]; ++k) {
+      const Vec3 t = transform_point(m[std::size_t(w.joint[k])], p);
+      for (int a = 0; a < 3; ++a) out[3 * std::size_t(v) + a] += w.weight[k] * t[a];
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -370,7 +386,7 @@ TEST_CASE("augment: helper bones carry no weight and change no body part", "[cha
   for (std::size_t j = 0; j < c.skeleton.names.size(); ++j) CHECK(b.body[j] == a.body[j]);
 }
 
-TEST_CASE("augment: chains get one bone more or fewer; boundaries elsewhere are kept", "[character][augment]") {
+TEST_CASE("augment: chains get one bone more or fewer, boundaries elsewhere are kept", "[character][augment]") {
   const Character c = humanoid();
   int more = 0, fewer = 0;
   for (std::uint32_t seed = 0; seed < 12; ++seed) {
@@ -438,6 +454,12 @@ TEST_CASE("augment: dataset variants follow their source's split part and round-
   DatasetDescription d3 = describe_dataset({"procedural:humanoid:1"}, {}, s);
   add_augmented_variants(d3);
   CHECK(d3.characters[1] != d.characters[4]);
+  // Reports name a variant after its source's family folder and file.
+  CHECK(dataset_character_name("/data/modular_women/Punk.glb") == "modular_women/Punk");
+  CHECK(dataset_character_name(augment_entry({{AugmentKind::twist}, 9, "/data/modular_women/Punk.glb"})) ==
+        "modular_women/Punk~aug9");
+  CHECK(dataset_character_name("procedural:humanoid:3") == "procedural:humanoid:3");
+  CHECK(dataset_character_name(d.characters[4]).rfind("procedural:humanoid:1~aug", 0) == 0);
   // A variant loads, named after its source.
   const Character v = load_dataset_character(d.characters[4]);
   CHECK(v.name.find("~aug") != std::string::npos);
@@ -466,7 +488,7 @@ TEST_CASE("augment: dataset variants follow their source's split part and round-
   DatasetDescription leak = d;
   leak.split.test.erase(std::find(leak.split.test.begin(), leak.split.test.end(), 9));
   leak.split.train.push_back(9);
-  CHECK_THROWS_WITH(validate_dataset(leak, "leak"), Catch::Contains("its source procedural:humanoid:3 is held out"));
+  CHECK_THROWS_WITH(validate_dataset(leak, "leak"), Catch::Contains("trains, but procedural:humanoid:3 (its source, or a variant of it) is held out"));
   auto write = [&](const std::string& from, const std::string& to) {
     std::ifstream f(path);
     std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
@@ -483,4 +505,37 @@ TEST_CASE("augment: dataset variants follow their source's split part and round-
   neg.augment.copies = -1;
   CHECK_THROWS_WITH(add_augmented_variants(neg), Catch::Contains("augment.copies"));
   fs::remove_all(dir);
+}
+
+TEST_CASE("augment: a shared Quaternius character stays consistent under every kind", "[character][augment][data]") {
+  const auto dir = charfix::data_dir();
+  const auto punk = dir / "characters/quaternius/modular_women/Punk.glb";
+  if (dir.empty() || !std::filesystem::exists(punk)) {
+    WARN("SKIPPED: data not found (" << punk << ")");
+    return;
+  }
+  const Character c = load_dataset_character(punk.string());
+  const std::vector<float> rest = rest_lbs(c);
+  float extent = 0;
+  for (float x : c.mesh.positions) extent = std::max(extent, std::abs(x));
+  for (AugmentKind k : all_augment_kinds()) {
+    INFO(augment_kind_name(k));
+    const Character a = augment_character(c, {k}, 3);
+    REQUIRE_NOTHROW(a.skeleton.validate("variant"));
+    REQUIRE_NOTHROW(a.mesh.validate(a.skeleton.num_joints(), "variant"));
+    CHECK(a.mesh.weights.max_influences() <= 4);
+    CHECK(a.name.find("modular_women/Punk~aug3") != std::string::npos);
+    // Skeleton edits keep the rest pose's skinned mesh (merging a bone the
+    // rest pose bends would not, so merge is left out).
+    if (k == AugmentKind::split || k == AugmentKind::twist || k == AugmentKind::helpers || k == AugmentKind::rename ||
+        k == AugmentKind::rigid) {
+      const std::vector<float> got = rest_lbs(a);
+      REQUIRE(got.size() == rest.size());
+      float worst = 0;
+      for (std::size_t i = 0; i < got.size(); ++i) worst = std::max(worst, std::abs(got[i] - rest[i]));
+      // rigid changes weights: only where a piece bends in the rest pose.
+      if (k != AugmentKind::rigid) CHECK(worst <= 1e-4f * std::max(1.0f, extent));
+    }
+    if (k == AugmentKind::rename) CHECK(map_rig(a.skeleton).body == map_rig(c.skeleton).body);
+  }
 }

@@ -80,8 +80,7 @@ int eval_weight_baseline(const std::string& method, const std::string& data, con
     const std::vector<float> truth = character::super_weights(pc.character.mesh.weights, j2b, B);
     auto r = character::evaluate_character_weights(pc, pred, truth, B, j2b, td.super.mask[std::size_t(c)], eo, c);
     const std::string& entry = td.description.characters[std::size_t(c)];
-    const std::filesystem::path f(entry);
-    r.name = entry.rfind("procedural:", 0) == 0 ? entry : f.parent_path().filename().string() + "/" + f.stem().string();
+    r.name = character::dataset_character_name(entry);
     progress.finish();  // the character's line replaces it
     if (!quiet)
       std::printf("  %s: %lld vertices, %d joints, %.2f s\n", r.name.c_str(), static_cast<long long>(r.vertices),

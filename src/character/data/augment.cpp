@@ -140,7 +140,10 @@ const std::vector<AugmentKind>& all_augment_kinds() {
 std::vector<AugmentKind> parse_augment_kinds(const std::string& list, const std::string& what) {
   std::vector<AugmentKind> out;
   std::string known;
-  for (AugmentKind k : all_augment_kinds()) known += (known.empty() ? "" : ", ") + std::string(augment_kind_name(k));
+  for (AugmentKind k : all_augment_kinds()) {
+    if (!known.empty()) known += ", ";
+    known += augment_kind_name(k);
+  }
   std::size_t start = 0;
   while (start <= list.size()) {
     const std::size_t end = std::min(list.find_first_of(",+", start), list.size());
@@ -533,12 +536,10 @@ Character add_helper_bones(const Character& c, std::uint32_t seed) {
   auto add = [&](const std::string& name, std::int32_t parent) {
     Transform t;
     for (int a = 0; a < 3; ++a) t.translation[a] = 0.05f * extent * u(rng);
-    const Mat4 bind = parent >= 0 ? inverse(s.inverse_bind[std::size_t(parent)]) : s.root_parent[0];
-    // A parent's bind frame may be scaled: place the helper by its bind
-    // frame times the local offset, so bind and rest stay consistent.
-    const Mat4 Bn = mul(bind, to_matrix(t));
+    // The parent's bind frame (scaled, maybe) times the local offset, so
+    // the helper's bind and rest transforms agree with its parent's.
+    const Mat4 Bn = mul(inverse(s.inverse_bind[std::size_t(parent)]), to_matrix(t));
     insert_joint(r, s.num_joints(), unique_name(s, name), parent, t, inverse(Bn));
-    if (parent < 0) s.root_parent.back() = c.skeleton.root_parent[0];
   };
   add("ik_foot_root", 0);
   add("ik_hand_root", 0);
@@ -688,7 +689,10 @@ std::string augment_entry(const AugmentEntry& e) {
   GATCORE_CHECK(!e.kinds.empty(), "augment_entry: no augmentations for ", e.source);
   GATCORE_CHECK(!e.source.empty(), "augment_entry: no source");
   std::string k;
-  for (AugmentKind x : e.kinds) k += (k.empty() ? "" : "+") + std::string(augment_kind_name(x));
+  for (AugmentKind x : e.kinds) {
+    if (!k.empty()) k += '+';
+    k += augment_kind_name(x);
+  }
   return "augment:" + k + ":" + std::to_string(e.seed) + ":" + e.source;
 }
 

@@ -71,12 +71,23 @@ void validate_dataset(const DatasetDescription& d, const std::string& where) {
   for (std::int32_t c : d.split.train) {
     const std::string src = augment_source(d.characters[std::size_t(c)]);
     GATCORE_CHECK(std::find(held_out.begin(), held_out.end(), src) == held_out.end(), where, ": character ", c, " (",
-                  d.characters[std::size_t(c)], ") trains, but its source ", src, " is held out");
+                  d.characters[std::size_t(c)], ") trains, but ", src, " (its source, or a variant of it) is held out");
   }
 }
 
 std::string augment_source(const std::string& entry) {
   return is_augment_entry(entry) ? parse_augment_entry(entry).source : entry;
+}
+
+std::string dataset_character_name(const std::string& entry) {
+  if (is_augment_entry(entry)) {
+    const AugmentEntry a = parse_augment_entry(entry);
+    return dataset_character_name(a.source) + "~aug" + std::to_string(a.seed);
+  }
+  if (entry.rfind("procedural:", 0) == 0) return entry;
+  const std::filesystem::path f(entry);
+  const std::string dir = f.parent_path().filename().string();
+  return (dir.empty() ? "" : dir + "/") + f.stem().string();
 }
 
 void add_augmented_variants(DatasetDescription& d) {
@@ -308,7 +319,10 @@ DatasetDescription load_dataset(const std::string& path) {
       GATCORE_CHECK(a.is_object(), path, ": field \"augment\" must be an object");
       std::string kinds;
       GATCORE_CHECK(a.at("kinds").is_array(), path, ": field \"augment.kinds\" must be an array of names");
-      for (const auto& k : a.at("kinds")) kinds += (kinds.empty() ? "" : ",") + k.get<std::string>();
+      for (const auto& k : a.at("kinds")) {
+        if (!kinds.empty()) kinds += ',';
+        kinds += k.get<std::string>();
+      }
       d.augment.kinds = parse_augment_kinds(kinds, path + ": field \"augment.kinds\"");
       d.augment.copies = json_number<int>(a.at("copies"), "augment.copies", 0, kMaxAugmentCopies, path);
       d.augment.seed = json_number<std::uint32_t>(a.at("seed"), "augment.seed", 0, 4294967295.0, path);

@@ -10,8 +10,9 @@
 // geometry still defines them, the artists' boundaries (each vertex's dominant
 // bone) are kept: only a split / merged bone's own vertices change it.
 //
-// A variant's clips, file-node map and primitives are those of one mesh
-// object (the source's animations do not fit an edited skeleton).
+// A variant whose mesh or joints change is one mesh object with no clips:
+// identity file-vertex map, one primitive, no file nodes (the source's
+// animations and exports do not fit an edited skeleton or mesh).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -96,7 +97,8 @@ Character transform_character(const Character& c, const Mat4& m);
 
 // --- a variant: several kinds, each with seeded parameters ---
 
-// Applies `kinds` in a fixed order (mesh, then skeleton, then placement);
+// Applies `kinds` in a fixed order (mesh, then skeleton, then placement;
+// remesh and decimate together: remesh only);
 // kinds that do not apply (no humanoid spine for `chains`, no bone to split)
 // leave the character unchanged. Names the result after the source:
 // "<source name without extension>~aug<seed>".

@@ -168,6 +168,10 @@ DatasetDescription describe_dataset(std::vector<std::string> characters, std::ve
 void add_augmented_variants(DatasetDescription& d);
 // The entry a variant was made from (the entry itself when not a variant).
 std::string augment_source(const std::string& entry);
+// A character's name in reports: "FOLDER/STEM" for a file (its family's
+// folder, e.g. modular_women/Punk), the entry for a procedural one, and the
+// source's name + "~augSEED" for a variant (modular_women/Punk~aug123).
+std::string dataset_character_name(const std::string& entry);
 
 // File entries are written relative to the dataset file's directory and
 // resolved against it on load (procedural entries unchanged).
