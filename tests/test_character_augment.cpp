@@ -325,6 +325,17 @@ TEST_CASE("augment: a remeshed vertex's weights lie within its source triangle's
     for (const auto& [j, w] : after[std::size_t(v)]) CHECK(joints.count(j) == 1);
   }
   CHECK(checked > r.mesh.num_vertices() / 2);
+  // Boundaries: a new vertex's dominant bone is one of its source corners'
+  // (a blend could in principle crown another bone; bounded at 2 %).
+  std::int64_t off = 0;
+  for (std::int64_t v = 0; v < r.mesh.num_vertices(); ++v) {
+    bool corner = false;
+    for (int a = 0; a < 3; ++a)
+      corner = corner || dominant(before[std::size_t(c.mesh.triangles[3 * src[std::size_t(v)] + a])]) ==
+                             dominant(after[std::size_t(v)]);
+    off += !corner;
+  }
+  CHECK(off <= r.mesh.num_vertices() / 50);
 }
 
 TEST_CASE("augment: rotation, scale and Z-up move the joints and leave the weights", "[character][augment]") {
