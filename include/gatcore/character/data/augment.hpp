@@ -67,7 +67,8 @@ Character decimate(const Character& c, float keep, const AugmentOptions& o = {})
 // Vertex clustering on a grid of `cells` along the longest side, per
 // connected piece (pieces never fuse); each cluster's vertex at its members'
 // centroid, its weights interpolated at the nearest point of the source
-// triangles around the cluster (barycentric, then top-k). `source_triangle`
+// triangles around the cluster (barycentric, then top-k); a piece that
+// falls within one or two cells vanishes. `source_triangle`
 // (when given) receives that triangle per new vertex.
 Character remesh(const Character& c, float cells, const AugmentOptions& o = {},
                  std::vector<std::int32_t>* source_triangle = nullptr);
