@@ -60,6 +60,7 @@ int export_character(const std::string& entry, const std::string& out) {
 struct BuildArgs {
   DatasetDescription s;
   std::string out, test_list, validation_list, joint_limits, distortion_scales = "1,4,16", reference = "delta_mush";
+  std::string augment;
   std::vector<std::string> inputs, motions;
   bool skip_bad = false, quiet = false;
   // --target CHARACTER TARGET MOTION (3 values per occurrence), and the
@@ -108,6 +109,7 @@ int build(BuildArgs& a) {
   s.distortion_scales = parse_distortion_scales(a.distortion_scales, "--distortion-scales");
   if (!a.joint_limits.empty()) s.joint_limits = load_joint_limits(a.joint_limits);
   s.reference = parse_reference_kind(a.reference, "--reference");
+  if (!a.augment.empty()) s.augment.kinds = parse_augment_kinds(a.augment, "--augment");
   if (s.reference == ReferenceKind::files)
     throw gatcore::InvalidArgument("--reference: file targets are given with --target CHARACTER TARGET MOTION");
   const std::string out = a.out, test_list = a.test_list, validation_list = a.validation_list;
@@ -195,6 +197,7 @@ int build(BuildArgs& a) {
     for (std::size_t c = 0; c < good.size(); ++c)
       (role[c] == 0 ? d.split.train : role[c] == 1 ? d.split.validation : d.split.test).push_back(static_cast<std::int32_t>(c));
   }
+  add_augmented_variants(d);  // after the split: each variant joins its source's part
   // File targets are checked (vertex counts, frame map, distance to LBS)
   // before anything is written.
   for (const FileTargetSource& t : d.targets) {
@@ -294,6 +297,11 @@ Runner setup_dataset(CLI::App& gat) {
                        "A,B,... an explicit split instead of the seeded one: each entry names one character by the "
                        "end of its path (e.g. modular_men/Punk.glb); the rest train");
   build_cmd.add_option("--validation-characters", b->validation_list, "C,D,... as --test-characters");
+  CLI::Option* aug = build_cmd.add_option("--augment", b->augment, "KIND,...|all: augmented variants of every character "
+                                          "(rigid, decimate, remesh, rename, split, merge, helpers, twist, chains, rotate, scale, z-up; "
+                                          "include/gatcore/character/data/augment.hpp), each in its source's split part");
+  build_cmd.add_option("--augment-copies", s.augment.copies, "variants per character")->check(int_in(0, kMaxAugmentCopies))->needs(aug)->capture_default_str();
+  build_cmd.add_option("--augment-seed", s.augment.seed, "seed of the variants' kinds and parameters")->check(int_in(0, 4294967295LL))->needs(aug);
   build_cmd.add_flag("-q,--quiet", b->quiet, "no progress line and no per-character lines: only the summary");
 
   auto entry = std::make_shared<std::string>(), out = std::make_shared<std::string>();

@@ -307,8 +307,7 @@ int run_eval(const EvalArgs& a) {
       for (std::size_t i = 0; i < data_.size(); ++i) {
         progress.update(std::int64_t(i), std::filesystem::path(data_[i].name).stem().string());
         const std::int32_t c = chars[i];
-        const std::string dir = std::filesystem::path(data_[i].name).parent_path().filename().string();
-        per[i].name = (dir.empty() ? "" : dir + "/") + std::filesystem::path(data_[i].name).stem().string();
+        per[i].name = character::dataset_character_name(data_[i].name);
         if (!mine(i)) continue;
         const Tensor y = predictions[i].contiguous() ? predictions[i] : predictions[i].clone();
         const Tensor t = data_[i].target.contiguous() ? data_[i].target : data_[i].target.clone();

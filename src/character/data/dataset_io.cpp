@@ -1,4 +1,5 @@
 // The dataset description file (JSON, through nlohmann-json).
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
@@ -59,12 +60,72 @@ void validate_dataset(const DatasetDescription& d, const std::string& where) {
                     "\" and again in \"", name, "\"");
       role[std::size_t(c)] = name;
     }
+  range("augment.copies", d.augment.copies, 0, kMaxAugmentCopies);
+  // A variant trains only if its source is not held out.
+  std::vector<std::string> held_out;
+  for (std::int64_t c = 0; c < n; ++c) {
+    const std::string& e = d.characters[std::size_t(c)];
+    if (is_augment_entry(e)) (void)parse_augment_entry(e);  // throws for a malformed one
+    if (role[std::size_t(c)] && std::string(role[std::size_t(c)]) != "train") held_out.push_back(augment_source(e));
+  }
+  for (std::int32_t c : d.split.train) {
+    const std::string src = augment_source(d.characters[std::size_t(c)]);
+    GATCORE_CHECK(std::find(held_out.begin(), held_out.end(), src) == held_out.end(), where, ": character ", c, " (",
+                  d.characters[std::size_t(c)], ") trains, but ", src, " (its source, or a variant of it) is held out");
+  }
+}
+
+std::string augment_source(const std::string& entry) {
+  return is_augment_entry(entry) ? parse_augment_entry(entry).source : entry;
+}
+
+std::string dataset_character_name(const std::string& entry) {
+  if (is_augment_entry(entry)) {
+    const AugmentEntry a = parse_augment_entry(entry);
+    return dataset_character_name(a.source) + "~aug" + std::to_string(a.seed);
+  }
+  if (entry.rfind("procedural:", 0) == 0) return entry;
+  const std::filesystem::path f(entry);
+  const std::string dir = f.parent_path().filename().string();
+  return (dir.empty() ? "" : dir + "/") + f.stem().string();
+}
+
+void add_augmented_variants(DatasetDescription& d) {
+  validate_dataset(d, "dataset");
+  if (d.augment.kinds.empty() || d.augment.copies == 0) return;
+  const auto n = static_cast<std::int32_t>(d.characters.size());
+  std::vector<std::vector<std::int32_t>*> part(std::size_t(n), nullptr);
+  for (auto* v : {&d.split.train, &d.split.validation, &d.split.test})
+    for (std::int32_t c : *v) part[std::size_t(c)] = v;
+  const std::size_t K = d.augment.kinds.size();
+  for (std::int32_t c = 0; c < n; ++c) {
+    if (is_augment_entry(d.characters[std::size_t(c)])) continue;
+    for (int copy = 0; copy < d.augment.copies; ++copy) {
+      // Seeded by (seed, source entry, copy), not by position, so the same
+      // character gets the same variants in any dataset.
+      std::uint32_t h = 2166136261u;  // FNV-1a: the same on every platform
+      for (unsigned char ch : d.characters[std::size_t(c)]) h = (h ^ ch) * 16777619u;
+      std::seed_seq seq{d.augment.seed, h, static_cast<std::uint32_t>(copy)};
+      std::mt19937 rng(seq);
+      AugmentEntry e;
+      e.source = d.characters[std::size_t(c)];
+      e.seed = rng();
+      // A non-empty subset of the kinds, each with probability 1/2.
+      while (e.kinds.empty())
+        for (std::size_t k = 0; k < K; ++k)
+          if (K == 1 || rng() % 2) e.kinds.push_back(d.augment.kinds[k]);
+      const auto index = static_cast<std::int32_t>(d.characters.size());
+      d.characters.push_back(augment_entry(e));
+      if (part[std::size_t(c)]) part[std::size_t(c)]->push_back(index);
+    }
+  }
+  validate_dataset(d, "dataset");
 }
 
 namespace {
 
 namespace fs = std::filesystem;
-bool is_file_entry(const std::string& e) { return e.rfind("procedural:", 0) != 0; }
+bool is_file_entry(const std::string& e) { return e.rfind("procedural:", 0) != 0 && !is_augment_entry(e); }
 
 // File entries are stored relative to the dataset file's directory.
 // Each path of an entry: a motion "SKELETON.asf:MOTION.amc" (load_motion) names two.
@@ -77,11 +138,21 @@ std::string each_path(const std::string& e, F&& f) {
   return f(e.substr(0, cut + 4)) + ":" + f(e.substr(cut + 5));
 }
 
+std::vector<std::string> resolve(const std::vector<std::string>& entries, const std::string& dataset);
+std::vector<std::string> relative_to(const std::vector<std::string>& entries, const std::string& dataset);
+
+// A variant's source is stored like any other entry.
+std::string map_variant(const std::string& e, const std::string& dataset, bool relative) {
+  AugmentEntry a = parse_augment_entry(e);
+  a.source = (relative ? relative_to({a.source}, dataset) : resolve({a.source}, dataset))[0];
+  return augment_entry(a);
+}
+
 std::vector<std::string> relative_to(const std::vector<std::string>& entries, const std::string& dataset) {
   const fs::path base = fs::absolute(fs::path(dataset)).parent_path();
   std::vector<std::string> out;
   for (const auto& e : entries)
-    out.push_back(is_file_entry(e) ? each_path(e, [&](const std::string& p) {
+    out.push_back(is_augment_entry(e) ? map_variant(e, dataset, true) : is_file_entry(e) ? each_path(e, [&](const std::string& p) {
       return fs::absolute(p).lexically_normal().lexically_relative(base).generic_string();
     })
                                    : e);
@@ -92,7 +163,7 @@ std::vector<std::string> resolve(const std::vector<std::string>& entries, const 
   const fs::path base = fs::absolute(fs::path(dataset)).parent_path();
   std::vector<std::string> out;
   for (const auto& e : entries)
-    out.push_back(is_file_entry(e) ? each_path(e, [&](const std::string& p) {
+    out.push_back(is_augment_entry(e) ? map_variant(e, dataset, false) : is_file_entry(e) ? each_path(e, [&](const std::string& p) {
       return fs::path(p).is_relative() ? (base / p).lexically_normal().string() : p;
     })
                                    : e);
@@ -141,6 +212,11 @@ void save_dataset(const std::string& path, const DatasetDescription& d) {
   j["validation"] = d.validation;
   j["test"] = d.test;
   j["split"] = {{"train", d.split.train}, {"validation", d.split.validation}, {"test", d.split.test}};
+  if (!d.augment.kinds.empty()) {
+    std::vector<std::string> kinds;
+    for (AugmentKind k : d.augment.kinds) kinds.emplace_back(augment_kind_name(k));
+    j["augment"] = {{"kinds", kinds}, {"copies", d.augment.copies}, {"seed", d.augment.seed}};
+  }
   write_file_atomic(path, j.dump(2) + "\n");
 }
 
@@ -238,6 +314,19 @@ DatasetDescription load_dataset(const std::string& path) {
     d.split.train = json_indices(j.at("split").at("train"), "split.train", path);
     d.split.validation = json_indices(j.at("split").at("validation"), "split.validation", path);
     d.split.test = json_indices(j.at("split").at("test"), "split.test", path);
+    if (j.contains("augment")) {
+      const auto& a = j.at("augment");
+      GATCORE_CHECK(a.is_object(), path, ": field \"augment\" must be an object");
+      std::string kinds;
+      GATCORE_CHECK(a.at("kinds").is_array(), path, ": field \"augment.kinds\" must be an array of names");
+      for (const auto& k : a.at("kinds")) {
+        if (!kinds.empty()) kinds += ',';
+        kinds += k.get<std::string>();
+      }
+      d.augment.kinds = parse_augment_kinds(kinds, path + ": field \"augment.kinds\"");
+      d.augment.copies = json_number<int>(a.at("copies"), "augment.copies", 0, kMaxAugmentCopies, path);
+      d.augment.seed = json_number<std::uint32_t>(a.at("seed"), "augment.seed", 0, 4294967295.0, path);
+    }
     const auto n = static_cast<std::int32_t>(d.characters.size());
     std::vector<char> has_target(std::size_t(n), 0);
     for (const FileTargetSource& t : d.targets) {
@@ -254,6 +343,10 @@ DatasetDescription load_dataset(const std::string& path) {
 }
 
 Character load_dataset_character(const std::string& entry) {
+  if (is_augment_entry(entry)) {
+    const AugmentEntry a = parse_augment_entry(entry);
+    return augment_character(load_dataset_character(a.source), a.kinds, a.seed);
+  }
   const std::string pre = "procedural:";
   if (entry.rfind(pre, 0) == 0) {
     const std::string rest = entry.substr(pre.size());

@@ -1,8 +1,9 @@
 #include "gatcore/character/eval/own_joint_weight_eval.hpp"
 
 #include <chrono>
-#include <filesystem>
+#include <string>
 
+#include "gatcore/character/data/dataset.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
 
@@ -29,8 +30,7 @@ std::vector<CharacterWeightEval> evaluate_own_joint_weights(
     const std::vector<float> truth = super_weights(pc.character.mesh.weights, j2b, B);
     auto r = evaluate_character_weights(pc, pred, truth, B, j2b, td.super.mask[std::size_t(c)], eo, c);
     const std::string& entry = td.description.characters[std::size_t(c)];
-    const std::filesystem::path f(entry);
-    r.name = entry.rfind("procedural:", 0) == 0 ? entry : f.parent_path().filename().string() + "/" + f.stem().string();
+    r.name = dataset_character_name(entry);
     if (done) done(r, s, pc.character.skeleton.num_joints());
     per.push_back(std::move(r));
   }

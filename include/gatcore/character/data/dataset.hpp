@@ -15,6 +15,7 @@
 #include <span>
 #include <vector>
 
+#include "gatcore/character/data/augment.hpp"
 #include "gatcore/character/deform/deform.hpp"
 #include "gatcore/character/deform/reference_deformer.hpp"
 #include "gatcore/character/features/features.hpp"
@@ -105,6 +106,15 @@ struct FileTargetSource {
   std::optional<double> first_frame;  // unset: the file's (.pc2 start frame; glTF 0)
 };
 
+// Augmented variants per character (augment.hpp): `copies` variants of every
+// source character, each applying a seeded non-empty subset of `kinds`.
+struct DatasetAugmentation {
+  std::vector<AugmentKind> kinds;  // empty: no variants
+  int copies = 1;
+  std::uint32_t seed = 0;
+};
+inline constexpr int kMaxAugmentCopies = 1000;
+
 // What `gat dataset build` writes (JSON): the sources and every setting the
 // samples depend on, so a trainer regenerates identical samples on the fly.
 struct DatasetDescription {
@@ -123,6 +133,9 @@ struct DatasetDescription {
   std::vector<int> distortion_scales;   // DenseGATs: detail-distortion columns (empty: the paper's features only)
   float validation = 0.1f, test = 0.1f;
   Split split;                          // by character, from seed
+  // Variants are entries "augment:KINDS:SEED:SOURCE" (augment_entry) after
+  // the sources; these settings record how they were made.
+  DatasetAugmentation augment;
 };
 
 // The ranges every dataset description must be in, whether from `gat
@@ -138,18 +151,35 @@ struct DatasetLimits {
 };
 // Throws InvalidArgument naming `where`, the field and the value for any
 // field out of range (DatasetLimits), a bad distortion scale, a split index
-// out of range or listed twice (within or across train / validation / test).
+// out of range or listed twice (within or across train / validation / test),
+// augment.copies out of [0, kMaxAugmentCopies], a malformed variant entry, or
+// a training variant whose source is a validation or test character.
 void validate_dataset(const DatasetDescription& d, const std::string& where);
 
 // Fills the split from the fractions and the seed (validated).
 DatasetDescription describe_dataset(std::vector<std::string> characters, std::vector<std::string> motions,
                                     const DatasetDescription& settings = {});
+// Appends d.augment.copies variants of every character that is not itself a
+// variant, named after it (augment_entry; each variant's kinds and seed drawn
+// from d.augment.seed, the source and the copy), and puts each in its
+// source's split part, so a character held out (validation, test; a whole
+// family in a leave-one-family-out split) keeps its variants out of training.
+// No kinds or no copies: unchanged. Call it after the split is final.
+void add_augmented_variants(DatasetDescription& d);
+// The entry a variant was made from (the entry itself when not a variant).
+std::string augment_source(const std::string& entry);
+// A character's name in reports: "FOLDER/STEM" for a file (its family's
+// folder, e.g. modular_women/Punk), the entry for a procedural one, and the
+// source's name + "~augSEED" for a variant (modular_women/Punk~aug123).
+std::string dataset_character_name(const std::string& entry);
+
 // File entries are written relative to the dataset file's directory and
 // resolved against it on load (procedural entries unchanged).
 void save_dataset(const std::string& path, const DatasetDescription& d);
 // Throws InvalidArgument naming the file and the field for bad files.
 DatasetDescription load_dataset(const std::string& path);
-// A character by its dataset entry (a file, or a procedural spec).
+// A character by its dataset entry (a file, a procedural spec, or a variant
+// "augment:KINDS:SEED:SOURCE" of one).
 Character load_dataset_character(const std::string& entry);
 
 // The DenseGATs tasks of one epoch for the given characters (indices into
