@@ -25,6 +25,7 @@
 #include "gatcore/character/inference/character_model.hpp"
 #include "gatcore/character/inference/model_description.hpp"
 #include "gatcore/character/viz/loss_curve.hpp"
+#include "gatcore/models/model_kind.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "progress.hpp"
 #include "gatcore/dist/communicator.hpp"
@@ -86,9 +87,12 @@ gat::Runner gat::setup_train(CLI::App& gat) {
   CLI::App& c = add_command(gat, "train", "train a model by name (densegats, neuroskinning, ...)");
   set_details(c, "Trains a model and writes a resumable checkpoint (safetensors + metadata) after every epoch.\n"
                 "Ctrl-C stops after the current epoch's checkpoint is written.");
-  c.add_option("--model", a->model_name,
-               "densegats (default), densegats-noself, densegats-nodense, origat, neuroskinning, "
-               "neuroskinning-nopool, fc, pointnet; paper settings");
+  // The list comes from the library's kinds, so a new model cannot be missing from the help.
+  std::string kinds;
+  for (const models::ModelKind k : models::all_model_kinds())
+    kinds += std::string(kinds.empty() ? "" : ", ") + models::model_kind_name(k) +
+             (k == models::ModelKind::densegats ? " (default)" : "");
+  c.add_option("--model", a->model_name, kinds + "; paper settings");
   c.add_option("--task", a->task,
                "weights or displacement (default: the model's paper task; e.g. --model neuroskinning --task "
                "displacement is DenseGATs' comparison)")
