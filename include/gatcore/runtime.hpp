@@ -29,6 +29,9 @@
 // skeleton, no names) predicting a new character's skin weights (a one-off
 // per character, not per frame: it allocates), optionally mixed with bone
 // heat's (set_heat_blend, as gat predict-weights --heat-blend).
+// bone_heat_weights: the same without a model (gat predict-weights
+// --method bone-heat). gat predict-weights and gat deform are these calls
+// with file import / export around them.
 //
 // Errors: gatcore::Error (InvalidArgument for bad input) with a message
 // naming the argument / file / value. No dependency on datasets, importers
@@ -39,6 +42,7 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/rig/mesh.hpp"
 #include "gatcore/character/rig/skeleton.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
@@ -51,6 +55,8 @@ namespace gatcore::runtime {
 // backend and a GPU is found (vulkan::select("auto")), else the CPU.
 enum class DeviceChoice { cpu, automatic, vulkan };
 Device resolve_device(DeviceChoice d);
+// The loaders take a DeviceChoice, or a Device the caller has already
+// selected (a vulkan::select spec of its own, as gat's --device).
 
 struct LoadedCorrective;  // the immutable loaded model (shared)
 
@@ -75,6 +81,7 @@ class Deformer {
   // speed, at an offset error of ~0.5 % of the correction (bench/RESULTS.md).
   static Deformer load(const std::string& checkpoint, DeviceChoice device = DeviceChoice::cpu,
                        Precision precision = Precision::fp32);
+  static Deformer load(const std::string& checkpoint, Device device, Precision precision = Precision::fp32);
   // A new, unbound deformer sharing this one's loaded model.
   Deformer share() const;
   Deformer(Deformer&&) noexcept;
@@ -112,6 +119,18 @@ class Deformer {
   // aliases can map joints onto them. Empty for nearest-joint models, for
   // checkpoints that do not record their training bones, and before bind.
   std::vector<std::string> unseen_absent_bones() const;
+  // The warning naming them (character::unseen_absent_bones_warning, with
+  // how many training characters had each), "" when there are none.
+  std::string absent_bones_warning() const;
+  // > 0: the model's joint columns are each vertex's K nearest joints (any
+  // skeleton, no names matched); 0: bone columns matched by name.
+  int nearest_joints() const;
+  // The bound skeleton as deform() reads joint transforms: bind's names,
+  // parents and rest transforms, its inverse bind matrices in the frame the
+  // features are computed in (the rest mesh turned by its root's bind
+  // transform). Poses for deform() are poses of this skeleton (a motion
+  // retargeted onto it, as gat deform does). Throws before bind.
+  const character::Skeleton& bound_skeleton() const;
 
  private:
   struct Bound;
@@ -122,9 +141,34 @@ class Deformer {
 
 struct LoadedWeights;
 
+// What a weight prediction matched and how long it took (milliseconds).
+struct WeightReport {
+  // Joints matched to a model bone (every joint for skinweights-any and
+  // bone heat) and the names of those without one (they get no weight).
+  std::int32_t mapped_joints = 0;
+  std::vector<std::string> unmapped;
+  // As Deformer::unseen_absent_bones / absent_bones_warning, for a
+  // name-matched model.
+  std::vector<std::string> unseen_absent_bones;
+  std::string absent_bones_warning;
+  double features_ms = 0, inference_ms = 0;
+  double bone_heat_ms = 0;  // bone heat's own weights (bone_heat_weights, or the heat blend's)
+};
+
+// A prediction's settings for one character.
+struct WeightOptions {
+  int max_influences = 4;  // kept per vertex (largest), renormalised
+  BindOptions bind;        // aliases (name-matched models only) and the name for messages
+  // The bone heat set_heat_blend mixes in: its joints forced to be bones /
+  // controls (joint_override, as gat predict-weights --bone / --control),
+  // its own min weight (0.01), ...; max_influences above replaces its own.
+  character::BoneHeatParams heat;
+};
+
 class WeightPredictor {
  public:
   static WeightPredictor load(const std::string& checkpoint, DeviceChoice device = DeviceChoice::cpu);
+  static WeightPredictor load(const std::string& checkpoint, Device device);
   WeightPredictor(WeightPredictor&&) noexcept;
   WeightPredictor& operator=(WeightPredictor&&) noexcept;
   ~WeightPredictor();
@@ -133,19 +177,45 @@ class WeightPredictor {
   // Not thread-safe on one predictor (the model runs in place); use one per thread.
   character::SkinWeights predict(const character::Mesh& rest, const character::Skeleton& skeleton,
                                  int max_influences = 4, const BindOptions& opt = {});
+  // The same with every setting; `report` (optional) receives what was
+  // matched and the timings.
+  character::SkinWeights predict(const character::Mesh& rest, const character::Skeleton& skeleton,
+                                 const WeightOptions& opt, WeightReport* report = nullptr);
   // Later predictions mix the model's weights with bone heat's:
   // (1 - share) * model + share * bone heat per vertex, the largest
   // max_influences kept (0, the default: the model alone). A hedge for a
   // character unlike every family the model was trained on
   // (docs/RESULTS.md). Throws unless share is in [0, 1].
   void set_heat_blend(float share);
+  float heat_blend() const;
+  // Later predictions drop influences below `share` of the vertex's total
+  // and renormalise, after the heat blend (0, the default: none; as gat
+  // predict-weights --min-weight). Throws unless share is in [0, 1).
+  void set_min_weight(float share);
+  float min_weight() const;
   // The bone names a name-matched model was trained on; empty for
   // skinweights-any (it takes any skeleton).
   const std::vector<std::string>& bones() const;
+  // skinweights-any: each vertex scores its own nearest bones
+  // (candidates_per_vertex of them), whatever the skeleton.
+  bool any_skeleton() const;
+  std::int64_t candidates_per_vertex() const;  // 0 for a name-matched model
+  const std::string& model_name() const;       // "neuroskinning", ...
+  Device device() const;
 
  private:
   explicit WeightPredictor(std::unique_ptr<LoadedWeights> m);
   std::unique_ptr<LoadedWeights> model_;
 };
+
+// Bone heat's skin weights (Baran & Popovic's heat diffusion from the
+// nearest visible bone, Blender's automatic weights) for the rest mesh on
+// any skeleton, no model: character::bone_heat_weights on them. As
+// WeightPredictor::predict, the mesh's own weights are ignored; `name` is
+// for messages; `report` (optional) gets the time (bone_heat_ms) and every
+// joint as mapped.
+character::SkinWeights bone_heat_weights(const character::Mesh& rest, const character::Skeleton& skeleton,
+                                         const character::BoneHeatParams& params = {},
+                                         const std::string& name = "character", WeightReport* report = nullptr);
 
 }  // namespace gatcore::runtime

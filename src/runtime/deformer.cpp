@@ -80,7 +80,10 @@ Deformer& Deformer::operator=(Deformer&&) noexcept = default;
 Deformer::~Deformer() = default;
 
 Deformer Deformer::load(const std::string& path, DeviceChoice device, Precision precision) {
-  const Device dev = resolve_device(device);
+  return load(path, resolve_device(device), precision);
+}
+
+Deformer Deformer::load(const std::string& path, Device dev, Precision precision) {
   models::LoadedModel lm = models::load_checkpoint(path);
   auto m = std::make_shared<LoadedCorrective>();
   m->bones = character_model_bones(lm, path, models::Task::displacement);
@@ -146,6 +149,15 @@ Precision Deformer::precision() const { return models::deploy_precision(*model_-
 std::vector<std::string> Deformer::unseen_absent_bones() const {
   if (!bound_ || model_->nearest > 0) return {};
   return character::unseen_absent_bones(bound_->mapping, model_->bones, model_->presence);
+}
+std::string Deformer::absent_bones_warning() const {
+  if (!bound_) return "";
+  return unseen_absent_bones_warning(bound_->pc.character.name, unseen_absent_bones(), model_->presence);
+}
+int Deformer::nearest_joints() const { return model_->nearest; }
+const Skeleton& Deformer::bound_skeleton() const {
+  GATCORE_CHECK(bound_, "Deformer::bound_skeleton: bind() a character first");
+  return bound_->pc.character.skeleton;
 }
 std::int32_t Deformer::mapped_joints() const {
   if (!bound_) return 0;

@@ -47,15 +47,10 @@ long parse_int(const std::string& flag, const std::string& v, long lo, long hi) 
   return std::strtol(v.c_str(), nullptr, 10);
 }
 
-void warn_unseen_absent_bones(const char* command, const gatcore::models::CheckpointFile& f,
-                              const std::string& model_path, const std::string& character,
-                              const gatcore::character::BoneMapping& m, const std::vector<std::string>& bones,
-                              const char* remedy) {
-  using namespace gatcore::character;
-  const BonePresence presence = checkpoint_bone_presence(f, model_path, bones.size());
-  const std::string w = unseen_absent_bones_warning(character, unseen_absent_bones(m, bones, presence), presence);
-  if (!w.empty())
-    std::fprintf(stderr, "%s: %s. Name the matching joints with --alias JOINT=BONE, or %s.\n", command, w.c_str(), remedy);
+void warn_absent_bones(const char* command, const std::string& warning, const char* remedy) {
+  if (!warning.empty())
+    std::fprintf(stderr, "%s: %s. Name the matching joints with --alias JOINT=BONE, or %s.\n", command, warning.c_str(),
+                 remedy);
 }
 
 }  // namespace gat

@@ -19,13 +19,9 @@ std::string device_label(gatcore::Device d);
 void add_alias(gatcore::character::BoneAliases& aliases, const std::string& spec);
 // A non-negative integer in [lo, hi]; throws naming the flag.
 long parse_int(const std::string& flag, const std::string& value, long lo, long hi);
-// "COMMAND: warning: CHARACTER lacks ... (character_model.hpp). Name the
-// matching joints with --alias JOINT=BONE, or REMEDY." on stderr when
-// `character` (mapped by `m`) lacks bones all the model's training characters
-// had (checkpoint `f` at `model_path`, bone columns `bones`); nothing otherwise.
-void warn_unseen_absent_bones(const char* command, const gatcore::models::CheckpointFile& f,
-                              const std::string& model_path, const std::string& character,
-                              const gatcore::character::BoneMapping& m, const std::vector<std::string>& bones,
-                              const char* remedy);
+// "COMMAND: WARNING. Name the matching joints with --alias JOINT=BONE, or
+// REMEDY." on stderr, WARNING the runtime's absent_bones_warning (a character
+// lacking bones all the model's training characters had); nothing when it is "".
+void warn_absent_bones(const char* command, const std::string& warning, const char* remedy);
 
 }  // namespace gat

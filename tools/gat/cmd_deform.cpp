@@ -2,7 +2,8 @@
 // a BVH motion retargeted onto the character, every frame linear blend
 // skinned and corrected by a DenseGATs-family checkpoint, baked for playback
 // as per-frame glTF morph targets (bake.hpp explains what a viewer shows)
-// and / or a point cache.
+// and / or a point cache. Each frame is the runtime's (runtime::Deformer,
+// bound once): the tool's numbers and timings are an engine's.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -10,17 +11,15 @@
 #include <filesystem>
 #include <string>
 
-#include <omp.h>
-
 #include "cli_util.hpp"
 #include "commands.hpp"
-#include "gatcore/character/inference/corrective.hpp"
 #include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/io/motion_source.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
-#include "progress.hpp"
 #include "gatcore/error.hpp"
+#include "gatcore/runtime.hpp"
+#include "progress.hpp"
 
 using namespace gatcore;
 using namespace gatcore::character;
@@ -58,17 +57,18 @@ int run(const DeformArgs& a) {
   apply_threads(a.common);
   const Device dev = device_from_flag(a.common.device, "deform");
   Activity doing("deforming " + in + " with " + model_path);
-  models::LoadedModel lm = models::load_checkpoint(model_path);
-  const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::displacement);
+  runtime::Deformer d = runtime::Deformer::load(model_path, dev);
   const Character ch = load_character(in);
   const Motion motion = load_motion(motion_path);
-  const int nearest = checkpoint_nearest_joints(lm.file, model_path);
-  const CorrectiveBinding d =
-      make_corrective_binding(ch, bones, aliases, checkpoint_distortion_scales(lm.file, model_path), nearest);
+  runtime::BindOptions bo;
+  bo.aliases = aliases;
+  bo.name = in;
+  d.bind(ch.mesh, ch.skeleton, bo);
   RetargetOptions ro;  // --alias names joints for the retarget too (JOINT=PART or a known joint name)
   ro.target_name = in;
   ro.source_aliases = ro.target_aliases = aliases;
-  const Clip clip = retarget(motion, d.prepared.character.skeleton, mat4_identity(), ro);
+  const Skeleton& skeleton = d.bound_skeleton();
+  const Clip clip = retarget(motion, skeleton, mat4_identity(), ro);
   const long nf = static_cast<long>(clip.frames.size());
   GATCORE_CHECK(nf > 0, motion_path, ": no frames");
   long first = 0, last = nf;
@@ -80,45 +80,46 @@ int run(const DeformArgs& a) {
     if (!b.empty()) last = parse_int("--frames (end)", b, 0, nf);
     GATCORE_CHECK(first < last, "--frames ", frames_spec, ": empty range; ", motion_path, " has frames [0, ", nf, ")");
   }
-  lm.model->to(dev);
-  lm.model->fold_batch_norm();
+  const int nearest = d.nearest_joints();
   const std::string joints =
       nearest > 0 ? std::to_string(ch.skeleton.num_joints()) + " joints, each vertex's " + std::to_string(nearest) +
                         " nearest: any skeleton"
-                  : std::to_string(d.mapping.num_mapped()) + " of " + std::to_string(ch.skeleton.num_joints()) +
+                  : std::to_string(d.mapped_joints()) + " of " + std::to_string(ch.skeleton.num_joints()) +
                         " joints matched";
   std::printf("gat deform: %s (%s) on %s (%lld vertices, %s), %s frames %ld..%ld at %g fps, device %s\n",
-              lm.model->config().name.c_str(), model_path.c_str(), in.c_str(),
-              static_cast<long long>(ch.mesh.num_vertices()), joints.c_str(), motion_path.c_str(), first, last - 1,
-              double(clip.fps), device_label(dev).c_str());
-  if (nearest == 0)
-    warn_unseen_absent_bones("gat deform", lm.file, model_path, in, d.mapping, bones,
-                             "use a model trained with --joint-columns nearest:K (any skeleton)");
+              d.model_name().c_str(), model_path.c_str(), in.c_str(), static_cast<long long>(ch.mesh.num_vertices()),
+              joints.c_str(), motion_path.c_str(), first, last - 1, double(clip.fps), device_label(dev).c_str());
+  warn_absent_bones("gat deform", d.absent_bones_warning(),
+                    "use a model trained with --joint-columns nearest:K (any skeleton)");
   BakedFrames baked;
   baked.fps = clip.fps;
+  const std::size_t n3 = static_cast<std::size_t>(3 * d.num_vertices());
+  std::vector<float> globals(static_cast<std::size_t>(16 * skeleton.num_joints())), lbs(n3);
   double sum_f = 0, sum_i = 0, sum_t = 0, sum_corr = 0, max_corr = 0;
   const auto t_all = std::chrono::steady_clock::now();
   Progress progress("deforming", last - first, "frames", quiet);
   for (long f = first; f < last; ++f) {
     progress.update(f - first);
-    const auto t0 = std::chrono::steady_clock::now();
-    CorrectedFrame cf = deform_frame(d, *lm.model, lm.norm, clip.frames[static_cast<std::size_t>(f)]);
-    const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const std::vector<Mat4> g = global_transforms(skeleton, clip.frames[static_cast<std::size_t>(f)]);
+    for (std::size_t j = 0; j < g.size(); ++j) std::copy(g[j].begin(), g[j].end(), globals.begin() + 16 * j);
+    std::vector<float> corrected(n3);
+    d.deform(globals, corrected, {}, lbs);
+    const runtime::FrameTiming t = d.last_timing();
     double mean = 0;
-    for (std::size_t v = 0; v < cf.lbs.size() / 3; ++v) {
-      const double dx = cf.corrected[3 * v] - cf.lbs[3 * v], dy = cf.corrected[3 * v + 1] - cf.lbs[3 * v + 1],
-                   dz = cf.corrected[3 * v + 2] - cf.lbs[3 * v + 2];
+    for (std::size_t v = 0; v < n3 / 3; ++v) {
+      const double dx = corrected[3 * v] - lbs[3 * v], dy = corrected[3 * v + 1] - lbs[3 * v + 1],
+                   dz = corrected[3 * v + 2] - lbs[3 * v + 2];
       const double c = std::sqrt(dx * dx + dy * dy + dz * dz);
       mean += c;
       max_corr = std::max(max_corr, c);
     }
-    mean /= double(std::max<std::size_t>(1, cf.lbs.size() / 3));
+    mean /= double(std::max<std::size_t>(1, n3 / 3));
     sum_corr += mean;
-    sum_f += cf.ms_features, sum_i += cf.ms_inference, sum_t += total;
+    sum_f += t.features_ms, sum_i += t.model_ms, sum_t += t.total_ms;
     if (a.verbose && !quiet)
       std::printf("frame %4ld  features %7.1f ms  inference %7.1f ms  total %7.1f ms  mean correction %.5f\n", f,
-                  cf.ms_features, cf.ms_inference, total, mean);
-    baked.positions.push_back(std::move(cf.corrected));
+                  t.features_ms, t.model_ms, t.total_ms, mean);
+    baked.positions.push_back(std::move(corrected));
   }
   progress.finish();
   const double n = double(last - first);

@@ -1,23 +1,20 @@
 // `gat predict-weights MODEL in.glb -o out.glb [--max-influences K]`: skin
 // weights for a character from a trained NeuroSkinning-family checkpoint (or
 // `--method bone-heat`, the classical baseline, without a model), written into
-// a copy of the file with everything else kept.
+// a copy of the file with everything else kept. The prediction is the
+// runtime's (runtime::WeightPredictor, runtime::bone_heat_weights): an engine
+// gets the tool's weights.
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <string>
 
-#include <omp.h>
-
 #include "cli_util.hpp"
 #include "commands.hpp"
-#include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/io/gltf.hpp"
-#include "gatcore/character/rig/limit_weights.hpp"
-#include "gatcore/character/inference/weight_prediction.hpp"
-#include "progress.hpp"
 #include "gatcore/error.hpp"
+#include "gatcore/runtime.hpp"
+#include "progress.hpp"
 
 using namespace gatcore;
 using namespace gatcore::character;
@@ -73,18 +70,11 @@ BoneHeatParams heat_params(const PredictArgs& a, const Character& ch, const std:
   return bp;
 }
 
-// --heat-blend S: the model's weights mixed with bone heat's on the same
-// (welded) character; --min-weight applies after.
-void apply_heat_blend(const PredictArgs& a, const Character& ch, const std::string& in, SkinWeights& w) {
-  if (a.heat_blend <= 0) return;
-  Activity doing("computing the bone-heat weights of " + in + " for --heat-blend");
-  w = mix_with_bone_heat(ch, w, float(a.heat_blend), heat_params(a, ch, in));
-}
-
-void print_heat_blend(const PredictArgs& a) {
-  if (a.heat_blend > 0)
-    std::printf("  mixed with bone heat: (1 - %g) * model + %g * bone heat per vertex, top %ld kept\n", a.heat_blend,
-                a.heat_blend, a.k);
+// "  influences per vertex: mean M, max X (limit K<limits>)" (no newline).
+void print_influences(const SkinWeights& w, long k, const std::string& limits = "") {
+  std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld%s)",
+              double(w.joint.size()) / double(std::max<std::int64_t>(1, w.num_vertices())),
+              static_cast<long long>(w.max_influences()), k, limits.c_str());
 }
 
 int run(const PredictArgs& a) {
@@ -96,9 +86,10 @@ int run(const PredictArgs& a) {
   if (a.out.empty()) throw CLI::RequiredError("--out");
   const std::string model_path = heat ? std::string() : a.positional[0], in = a.positional.back(), &out = a.out;
   const long k = a.k;
-  const double min_weight = a.min_weight;
-  BoneAliases aliases;
-  for (const auto& al : a.aliases) add_alias(aliases, al);
+  runtime::WeightOptions opt;
+  opt.max_influences = int(k);
+  opt.bind.name = in;
+  for (const auto& al : a.aliases) add_alias(opt.bind.aliases, al);
   GATCORE_CHECK(is_gltf_path(in), in, ": predict-weights reads glTF characters (.glb / .gltf)");
   GATCORE_CHECK(is_gltf_path(out), out, ": the output must be a .glb or .gltf file");
   const std::filesystem::path dir = std::filesystem::path(out).parent_path();
@@ -111,28 +102,29 @@ int run(const PredictArgs& a) {
   progress.set_stages();
   int step = 0;
   const auto stage = [&](const char* what) { progress.update(step++, what); };
+  runtime::WeightReport report;
   if (heat) {
-    GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with --method bone-heat (no model bones to match)");
+    GATCORE_CHECK(opt.bind.aliases.pairs.empty(),
+                  "--alias has no effect with --method bone-heat (no model bones to match)");
     GATCORE_CHECK(a.heat_blend == 0, "--heat-blend mixes a model's weights with bone heat's; with --method "
                                      "bone-heat there is no model");
     stage("reading the character");
     const Character ch = load_gltf(in);
     BoneHeatParams bp = heat_params(a, ch, in);
-    if (min_weight >= 0) bp.min_weight = float(min_weight);
+    if (a.min_weight >= 0) bp.min_weight = float(a.min_weight);
     Activity doing("computing the bone-heat weights of " + in);
     stage("bone heat: visibility and heat diffusion");
-    const auto t0 = std::chrono::steady_clock::now();
-    const SkinWeights w = bone_heat_weights(ch, bp);
-    const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const SkinWeights w = runtime::bone_heat_weights(ch.mesh, ch.skeleton, bp, in, &report);
     stage("writing");
     save_gltf_with_weights(in, ch, w, out, int(k));
     progress.finish();
     std::printf("gat predict-weights: bone heat on %s: %lld vertices welded (%lld in the file), %d joints\n",
                 in.c_str(), static_cast<long long>(ch.mesh.num_vertices()),
                 static_cast<long long>(ch.num_file_vertices()), ch.skeleton.num_joints());
-    std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld, min weight %.3g); %.1f ms -> %s\n",
-                double(w.joint.size()) / double(std::max<std::int64_t>(1, w.num_vertices())),
-                static_cast<long long>(w.max_influences()), k, double(bp.min_weight), ms, out.c_str());
+    char min_weight[64];
+    std::snprintf(min_weight, sizeof min_weight, ", min weight %.3g", double(bp.min_weight));
+    print_influences(w, k, min_weight);
+    std::printf("; %.1f ms -> %s\n", report.bone_heat_ms, out.c_str());
     print_weightless_joints(ch, w, "controls outside the mesh, or no vertex's nearest bone");
     return 0;
   }
@@ -142,69 +134,53 @@ int run(const PredictArgs& a) {
   const Device dev = device_from_flag(a.common.device, "predict-weights");
   Activity reading("reading the checkpoint " + model_path);
   stage("reading the checkpoint");
-  models::LoadedModel lm = models::load_checkpoint(model_path);
-  if (models::any_skeleton(lm.model->config().kind())) {
-    // Skeleton-agnostic: each vertex's own nearest bones, no names to match.
-    GATCORE_CHECK(aliases.pairs.empty(), "--alias has no effect with skinweights-any (it matches no bone names)");
-    stage("reading the character");
-    const Character ch = load_gltf(in);
-    lm.model->to(dev);
-    lm.model->fold_batch_norm();
-    stage("features and inference");
-    WeightPrediction p = predict_skin_weights_any(*lm.model, lm.norm, ch, int(k));
-    apply_heat_blend(a, ch, in, p.weights);
-    if (min_weight > 0) p.weights = limit_weights(p.weights, int(k), float(min_weight));
-    stage("writing");
-    save_gltf_with_weights(in, ch, p.weights, out, int(k));
-    progress.finish();
+  runtime::WeightPredictor predictor = runtime::WeightPredictor::load(model_path, dev);
+  // Skeleton-agnostic (skinweights-any): each vertex's own nearest bones, no names to match.
+  const bool any = predictor.any_skeleton();
+  GATCORE_CHECK(!any || opt.bind.aliases.pairs.empty(),
+                "--alias has no effect with skinweights-any (it matches no bone names)");
+  predictor.set_heat_blend(float(a.heat_blend));
+  if (a.min_weight > 0) predictor.set_min_weight(float(a.min_weight));
+  stage("reading the character");
+  const Character ch = load_gltf(in);
+  if (a.heat_blend > 0) opt.heat = heat_params(a, ch, in);
+  Activity doing("predicting the skin weights of " + in);
+  stage("features and inference");
+  const SkinWeights w = predictor.predict(ch.mesh, ch.skeleton, opt, &report);
+  stage("writing");
+  save_gltf_with_weights(in, ch, w, out, int(k));
+  progress.finish();
+
+  if (any) {
     std::printf("gat predict-weights: skinweights-any (%s, %lld candidate bones per vertex) on %s, device %s\n",
-                model_path.c_str(), static_cast<long long>(lm.model->config().out_dim), in.c_str(),
+                model_path.c_str(), static_cast<long long>(predictor.candidates_per_vertex()), in.c_str(),
                 device_label(dev).c_str());
     std::printf("  %lld vertices welded (%lld in the file), %d joints\n", static_cast<long long>(ch.mesh.num_vertices()),
                 static_cast<long long>(ch.num_file_vertices()), ch.skeleton.num_joints());
-    print_heat_blend(a);
-    std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld)\n",
-                double(p.weights.joint.size()) / double(std::max<std::int64_t>(1, p.weights.num_vertices())),
-                static_cast<long long>(p.weights.max_influences()), k);
-    std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
-                out.c_str());
-    print_weightless_joints(ch, p.weights, "no vertex's candidate, or scored below the kept influences");
-    return 0;
+  } else {
+    std::printf("gat predict-weights: %s (%s, %zu bones) on %s, device %s\n", predictor.model_name().c_str(),
+                model_path.c_str(), predictor.bones().size(), in.c_str(), device_label(dev).c_str());
+    std::printf("  %lld vertices welded (%lld in the file), %d joints: %d matched to the model's bones",
+                static_cast<long long>(ch.mesh.num_vertices()), static_cast<long long>(ch.num_file_vertices()),
+                ch.skeleton.num_joints(), report.mapped_joints);
+    if (!report.unmapped.empty()) {
+      std::string names;
+      for (std::size_t j = 0; j < report.unmapped.size() && j < 8; ++j) names += (j ? ", " : "") + report.unmapped[j];
+      std::printf(", %zu without a bone get no weight (%s%s)", report.unmapped.size(), names.c_str(),
+                  report.unmapped.size() > 8 ? ", ..." : "");
+    }
+    std::printf("\n");
   }
-  const std::vector<std::string> bones = character_model_bones(lm, model_path, models::Task::weights);
-  stage("reading the character");
-  const Character ch = load_gltf(in);
-  lm.model->to(dev);
-  lm.model->fold_batch_norm();
-  Activity doing("predicting the skin weights of " + in);
-  stage("features and inference");
-  WeightPrediction p = predict_skin_weights(*lm.model, lm.norm, bones, ch, int(k), aliases);
-  apply_heat_blend(a, ch, in, p.weights);
-  if (min_weight > 0) p.weights = limit_weights(p.weights, int(k), float(min_weight));
-  stage("writing");
-  save_gltf_with_weights(in, ch, p.weights, out, int(k));
-  progress.finish();
-
-  std::printf("gat predict-weights: %s (%s, %zu bones) on %s, device %s\n", lm.model->config().name.c_str(),
-              model_path.c_str(), bones.size(), in.c_str(), device_label(dev).c_str());
-  std::printf("  %lld vertices welded (%lld in the file), %d joints: %d matched to the model's bones",
-              static_cast<long long>(ch.mesh.num_vertices()), static_cast<long long>(ch.num_file_vertices()),
-              ch.skeleton.num_joints(), p.mapping.num_mapped());
-  if (!p.mapping.unmapped.empty()) {
-    std::string names;
-    for (std::size_t j = 0; j < p.mapping.unmapped.size() && j < 8; ++j) names += (j ? ", " : "") + p.mapping.unmapped[j];
-    std::printf(", %zu without a bone get no weight (%s%s)", p.mapping.unmapped.size(), names.c_str(),
-                p.mapping.unmapped.size() > 8 ? ", ..." : "");
-  }
-  std::printf("\n");
-  print_heat_blend(a);
-  std::printf("  influences per vertex: mean %.2f, max %lld (limit %ld)\n",
-              double(p.weights.joint.size()) / double(std::max<std::int64_t>(1, p.weights.num_vertices())),
-              static_cast<long long>(p.weights.max_influences()), k);
-  std::printf("  features %.1f ms, inference %.1f ms -> %s\n", 1e3 * p.seconds_features, 1e3 * p.seconds_inference,
-              out.c_str());
-  warn_unseen_absent_bones("gat predict-weights", lm.file, model_path, in, p.mapping, bones,
-                           "predict with a skinweights-any model or --method bone-heat (any skeleton)");
+  if (a.heat_blend > 0)
+    std::printf("  mixed with bone heat: (1 - %g) * model + %g * bone heat per vertex, top %ld kept\n", a.heat_blend,
+                a.heat_blend, k);
+  print_influences(w, k);
+  std::printf("\n  features %.1f ms, inference %.1f ms -> %s\n", report.features_ms, report.inference_ms, out.c_str());
+  if (any)
+    print_weightless_joints(ch, w, "no vertex's candidate, or scored below the kept influences");
+  else
+    warn_absent_bones("gat predict-weights", report.absent_bones_warning,
+                      "predict with a skinweights-any model or --method bone-heat (any skeleton)");
   return 0;
 }
 
