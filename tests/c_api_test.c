@@ -137,6 +137,16 @@ int main(void) {
       EXPECT(fabsf(pw[2 * v] + pw[2 * v + 1] - 1.0f) < 1e-5f);
       EXPECT(pj[2 * v] >= 0 && pj[2 * v] < J);
     }
+    /* A min weight: every kept influence at least that share, each vertex
+     * still summing to 1; 1 and NULL are refused. */
+    EXPECT(gatcore_weight_predictor_set_min_weight(p, 1.0f) == GATCORE_ERROR_INVALID_ARGUMENT);
+    EXPECT(gatcore_weight_predictor_set_min_weight(NULL, 0.3f) == GATCORE_ERROR_INVALID_ARGUMENT);
+    EXPECT(gatcore_weight_predictor_set_min_weight(p, 0.45f) == GATCORE_OK);
+    EXPECT(gatcore_weight_predictor_predict(p, &mesh, &sk, 2, pj, pw) == GATCORE_OK);
+    for (int v = 0; v < NV; ++v) {
+      EXPECT(fabsf(pw[2 * v] + pw[2 * v + 1] - 1.0f) < 1e-5f);
+      EXPECT(pw[2 * v + 1] == 0.0f || pw[2 * v + 1] >= 0.45f - 1e-6f);
+    }
     gatcore_weight_predictor_destroy(p);
   }
   if (failures) fprintf(stderr, "%d failure(s)\n", failures);

@@ -24,6 +24,7 @@
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
 #include "gatcore/character/rig/blend_weights.hpp"
+#include "gatcore/character/rig/limit_weights.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/train.hpp"
 #include "gatcore/gatcore.h"
@@ -176,6 +177,24 @@ std::string corrective_checkpoint(const std::string& name, const std::vector<std
   return path;
 }
 
+// A fresh (untrained) NeuroSkinning checkpoint on `bones`, with `metadata` added.
+std::string weights_checkpoint(const std::string& name, const std::vector<std::string>& bones,
+                               const std::map<std::string, std::string>& metadata = {}) {
+  models::ModelConfig wc = models::ModelConfig::defaults("neuroskinning", 6 + std::int64_t(bones.size()),
+                                                         std::int64_t(bones.size()));
+  wc.stage1 = {16}, wc.gc_dims = {8, 8, 8}, wc.global_mlp = {32}, wc.classifier = {32}, wc.gc_pool = {4, 6, 8};
+  auto wm = models::make_model(wc, 1);
+  const std::string path = tmp(name);
+  std::map<std::string, std::string> md{{"features", "neuroskinning"}, {"skeleton", joined(bones)}};
+  md.insert(metadata.begin(), metadata.end());
+  models::save_checkpoint(path, *wm, models::Normaliser{}, nullptr, md);
+  return path;
+}
+
+bool same(const SkinWeights& a, const SkinWeights& b) {
+  return a.ptr == b.ptr && a.joint == b.joint && a.weight == b.weight;
+}
+
 using posefix::globals_of;
 using posefix::humanoid;
 using posefix::test_pose;
@@ -196,9 +215,14 @@ TEST_CASE("runtime::Deformer gives gat deform's numbers bitwise", "[runtime]") {
     lm.model->fold_batch_norm();
     const CorrectiveBinding ref = make_corrective_binding(ch, bones, {}, checkpoint_distortion_scales(lm.file, path));
 
-    runtime::Deformer d = runtime::Deformer::load(path);
+    runtime::Deformer d = runtime::Deformer::load(path, Device::cpu);
+    CHECK_THROWS_WITH(d.bound_skeleton(), Contains("bind() a character first"));
     d.bind(ch.mesh, ch.skeleton);
     REQUIRE(d.num_vertices() == ch.mesh.num_vertices());
+    CHECK(d.nearest_joints() == 0);
+    // gat deform retargets onto the bound skeleton: deform_frame's.
+    CHECK(d.bound_skeleton().names == ref.prepared.character.skeleton.names);
+    CHECK(d.bound_skeleton().inverse_bind == ref.prepared.character.skeleton.inverse_bind);
     CHECK(d.mapped_joints() == ch.skeleton.num_joints());
     CHECK(d.model_name() == name);
     const std::size_t n3 = std::size_t(3 * d.num_vertices());
@@ -447,13 +471,7 @@ TEST_CASE("runtime::Deformer reports bad input as errors naming it", "[runtime]"
   for (auto& n : stranger.names) n = "xx_" + n + "_yy";
   CHECK_THROWS_WITH(d.bind(ch.mesh, stranger), Contains("none of its"));
   // A skin-weight checkpoint is not a corrective model.
-  models::ModelConfig wc = models::ModelConfig::defaults("neuroskinning", 6 + std::int64_t(bones.size()),
-                                                         std::int64_t(bones.size()));
-  wc.stage1 = {16}, wc.gc_dims = {8, 8, 8}, wc.global_mlp = {32}, wc.classifier = {32}, wc.gc_pool = {4, 6, 8};
-  auto wm = models::make_model(wc, 1);
-  const std::string wpath = tmp("weights.gcm");
-  models::save_checkpoint(wpath, *wm, models::Normaliser{}, nullptr,
-                          {{"features", "neuroskinning"}, {"skeleton", joined(bones)}});
+  const std::string wpath = weights_checkpoint("weights.gcm", bones);
   CHECK_THROWS_WITH(runtime::Deformer::load(wpath), Contains("weights.gcm"));
 
   // WeightPredictor: predict_skin_weights' weights.
@@ -498,6 +516,98 @@ TEST_CASE("runtime::Deformer reports bad input as errors naming it", "[runtime]"
   CHECK(mixed.joint == mref.joint);
   CHECK(mixed.weight == mref.weight);
   CHECK(mixed.joint != aref.joint);  // the mix is not the model alone
+}
+
+// gat predict-weights is these calls: each setting (heat blend with bone heat's
+// joints forced, min weight, aliases) gives the character functions' weights
+// bitwise, and the report says what was matched.
+TEST_CASE("runtime::WeightPredictor's settings and report give the character functions' weights", "[runtime]") {
+  const Character ch = humanoid(3);
+  std::vector<std::string> bones = bone_names(ch.skeleton);
+  std::string presence;  // every training character had every bone but the "tail"
+  for (std::size_t b = 0; b < bones.size(); ++b) presence += std::string(b ? "," : "") + (bones[b] == "tail" ? "0" : "2");
+  const std::string path =
+      weights_checkpoint("weights_presence.gcm", bones, {{"bone_presence", presence}, {"training_characters", "2"}});
+  runtime::WeightPredictor wp = runtime::WeightPredictor::load(path, Device::cpu);
+  CHECK_FALSE(wp.any_skeleton());
+  CHECK(wp.candidates_per_vertex() == 0);
+  CHECK(wp.model_name() == "neuroskinning");
+  CHECK(wp.device() == Device::cpu);
+  models::LoadedModel lm = models::load_checkpoint(path);
+  lm.model->fold_batch_norm();
+
+  // Plain: predict_skin_weights, every joint matched, nothing absent.
+  runtime::WeightOptions opt;
+  opt.max_influences = 5;
+  opt.bind.name = "h3";
+  runtime::WeightReport rep;
+  const WeightPrediction ref = predict_skin_weights(*lm.model, lm.norm, bones, ch, 5);
+  CHECK(same(wp.predict(ch.mesh, ch.skeleton, opt, &rep), ref.weights));
+  CHECK(rep.mapped_joints == ch.skeleton.num_joints());
+  CHECK(rep.unmapped.empty());
+  CHECK(rep.unseen_absent_bones.empty());
+  CHECK(rep.absent_bones_warning.empty());
+  CHECK(rep.inference_ms > 0);
+
+  // A joint aliased away: unmapped, reported absent with the warning's wording.
+  const std::string last = ch.skeleton.names.back();
+  opt.bind.aliases.pairs.emplace_back(normalise_bone_name(last), "not_a_bone");
+  const WeightPrediction aref = predict_skin_weights(*lm.model, lm.norm, bones, ch, 5, opt.bind.aliases);
+  CHECK(same(wp.predict(ch.mesh, ch.skeleton, opt, &rep), aref.weights));
+  CHECK(rep.mapped_joints == ch.skeleton.num_joints() - 1);
+  CHECK(rep.unmapped == std::vector<std::string>{last});
+  CHECK(rep.unseen_absent_bones == std::vector<std::string>{normalise_bone_name(last)});
+  CHECK_THAT(rep.absent_bones_warning, Contains("h3 lacks 1 of the model's") && Contains("all 2 training characters"));
+  opt.bind.aliases.pairs.clear();
+
+  // Heat blend with a joint forced to be a control, then a min weight:
+  // mix_with_bone_heat, then limit_weights.
+  BoneHeatParams bp;
+  bp.joint_override.assign(std::size_t(ch.skeleton.num_joints()), 0);
+  bp.joint_override[1] = -1;
+  bp.max_influences = 5;
+  opt.heat = bp;
+  opt.heat.max_influences = 2;  // replaced by opt.max_influences
+  wp.set_heat_blend(0.4f);
+  CHECK(wp.heat_blend() == 0.4f);
+  const SkinWeights mixed = mix_with_bone_heat(ch, ref.weights, 0.4f, bp);
+  const SkinWeights got_mixed = wp.predict(ch.mesh, ch.skeleton, opt, &rep);
+  CHECK(same(got_mixed, mixed));
+  CHECK(rep.bone_heat_ms > 0);
+  CHECK_FALSE(same(mixed, mix_with_bone_heat(ch, ref.weights, 0.4f, BoneHeatParams{})));  // the override counts
+  CHECK_THROWS_WITH(wp.set_min_weight(1.0f), Contains("[0, 1)"));
+  CHECK_THROWS_WITH(wp.set_min_weight(-0.1f), Contains("[0, 1)"));
+  wp.set_min_weight(0.2f);
+  CHECK(wp.min_weight() == 0.2f);
+  const SkinWeights limited = limit_weights(mixed, 5, 0.2f);
+  const SkinWeights got = wp.predict(ch.mesh, ch.skeleton, opt);
+  CHECK(same(got, limited));
+  CHECK(got.joint.size() < mixed.joint.size());  // influences were dropped
+  // The older overload is the same call with default bone heat.
+  wp.set_heat_blend(0.0f);
+  CHECK(same(wp.predict(ch.mesh, ch.skeleton, 5), limit_weights(ref.weights, 5, 0.2f)));
+}
+
+// gat predict-weights --method bone-heat is this call.
+TEST_CASE("runtime::bone_heat_weights gives character::bone_heat_weights", "[runtime]") {
+  const Character ch = humanoid(3);
+  BoneHeatParams bp;
+  bp.max_influences = 3;
+  bp.min_weight = 0.05f;
+  bp.joint_override.assign(std::size_t(ch.skeleton.num_joints()), 0);
+  bp.joint_override[2] = -1;
+  runtime::WeightReport rep;
+  rep.unmapped = {"stale"};
+  const SkinWeights w = runtime::bone_heat_weights(ch.mesh, ch.skeleton, bp, "h3", &rep);
+  CHECK(same(w, bone_heat_weights(ch, bp)));
+  CHECK(std::find(w.joint.begin(), w.joint.end(), 2) == w.joint.end());  // the control gets no weight
+  CHECK(rep.mapped_joints == ch.skeleton.num_joints());
+  CHECK(rep.unmapped.empty());
+  CHECK(rep.bone_heat_ms > 0);
+  CHECK(same(runtime::bone_heat_weights(ch.mesh, ch.skeleton), bone_heat_weights(ch)));
+  Mesh broken = ch.mesh;
+  broken.triangles[4] = 1 << 30;
+  CHECK_THROWS_WITH(runtime::bone_heat_weights(broken, ch.skeleton, bp, "h3"), Contains("h3 mesh"));
 }
 
 TEST_CASE("the C API gives the C++ runtime's numbers and its errors as codes", "[runtime][c_api]") {
@@ -586,6 +696,9 @@ TEST_CASE("the C API gives the C++ runtime's numbers and its errors as codes", "
     bo.aliases.pairs.emplace_back(normalise_bone_name(s.names.back()), "not_a_bone");
     cpp.bind(ch.mesh, ch.skeleton, bo);
     CHECK(cpp.unseen_absent_bones() == std::vector<std::string>{lost});
+    CHECK_THAT(cpp.absent_bones_warning(), Contains("character lacks 1 of the model's") && Contains("(" + lost + ")"));
+    cpp.bind(ch.mesh, ch.skeleton);
+    CHECK(cpp.absent_bones_warning().empty());
     gatcore_deformer_destroy(d);
     d = nullptr;
   }

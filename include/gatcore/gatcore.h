@@ -161,6 +161,10 @@ gatcore_status gatcore_weight_predictor_predict(gatcore_weight_predictor* p, con
  * model + share * bone heat per vertex, the largest k kept (0, the default:
  * the model alone; as gat predict-weights --heat-blend). share in [0, 1]. */
 gatcore_status gatcore_weight_predictor_set_heat_blend(gatcore_weight_predictor* p, float share);
+/* Later predictions drop each vertex's influences below `share` of its total
+ * and renormalise, after the heat blend (0, the default: none; as gat
+ * predict-weights --min-weight). share in [0, 1). */
+gatcore_status gatcore_weight_predictor_set_min_weight(gatcore_weight_predictor* p, float share);
 
 #ifdef __cplusplus
 }

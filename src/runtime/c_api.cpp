@@ -347,4 +347,10 @@ gatcore_status gatcore_weight_predictor_set_heat_blend(gatcore_weight_predictor*
                  [&] { p->p.set_heat_blend(share); });
 }
 
+gatcore_status gatcore_weight_predictor_set_min_weight(gatcore_weight_predictor* p, float share) {
+  GATCORE_C_REQUIRE(p, "gatcore_weight_predictor_set_min_weight: p must not be NULL");
+  return guarded("gatcore_weight_predictor_set_min_weight", GATCORE_ERROR_INVALID_ARGUMENT,
+                 [&] { p->p.set_min_weight(share); });
+}
+
 }  // extern "C"
