@@ -13,7 +13,8 @@
 // rest details of the distortion columns, the bone mapping) and allocates
 // every per-frame buffer and the model's workspace (models::DeployPlan);
 // deform() then allocates nothing on the CPU (tested) and gives exactly
-// `gat deform`'s numbers (tested bitwise). One Deformer per character; the
+// the numbers of the character layer's per-frame path (deform_frame, tested
+// bitwise); `gat deform` is this class. One Deformer per character; the
 // loaded model is immutable and shared by share(), so characters can be
 // deformed from different threads at once (CPU; the Vulkan backend is one
 // command stream: deformers on Vulkan are serialised internally).

@@ -1,5 +1,5 @@
-// runtime::Deformer: gat deform's per-frame computation (corrective.cpp's
-// deform_frame: frame_features.hpp's pose_frame and feature functions) with
+// runtime::Deformer: the per-frame computation of corrective.cpp's
+// deform_frame (frame_features.hpp's pose_frame and feature functions) with
 // every rest-pose quantity computed at bind() and every per-frame buffer
 // allocated there too. pose_frame is shared (its into-buffer overload); the
 // feature columns call the same functions (their into-buffer overloads) in
