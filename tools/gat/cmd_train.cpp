@@ -408,8 +408,9 @@ int run_train(TrainArgs a) {
     return md;
   };
   std::vector<LossRecord> history;
-  if (!resume.empty() && loaded.file.metadata.count("loss_history")) {
-    history = gatcore::character::parse_history(loaded.file.metadata.at("loss_history"), resume);
+  if (!resume.empty()) {
+    const std::string h = train::read_run_record(loaded.file, resume).loss_history;
+    if (!h.empty()) history = gatcore::character::parse_history(h, resume);
     std::erase_if(history, [&](const LossRecord& r) { return r.epoch > trainer.epoch(); });
   }
   // --keep-best: the lowest validation loss (or L1) so far, a resumed run's
