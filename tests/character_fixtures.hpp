@@ -1,8 +1,9 @@
 #pragma once
 // Characters the character tests build themselves, so the suite covers the
 // importer and the deformers without downloaded data:
-// - tube(): a capped cylinder along +Y bound to two joints (root at y = 0,
-//   "bone1" at y = length / 2) with smooth weights across the middle;
+// - tube_character(): the library's two-bone tube (character/data/tube.hpp),
+//   capped, root at y = 0, "bone1" at y = length / 2, weights blended
+//   across the middle;
 // - skinned_glb(): the same tube written as a binary glTF by hand, with a UV
 //   seam (duplicated vertices), a second primitive (a disjoint box on bone1),
 //   a weightless helper joint, an animation, and switches that break it.
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/character/data/tube.hpp"
 #include "gatcore/character/rig/character.hpp"
 
 namespace charfix {
@@ -38,74 +40,42 @@ struct Tube {
   std::vector<float> weights;         // 4 per vertex
 };
 
-// rings x segments grid; `seam` duplicates the first column as a last one
-// (a UV seam); `caps` adds a centre vertex and a fan at each end.
+// The library's tube (character/data/tube.hpp), rings x segments, with
+// 4 influences per vertex as a glTF file stores them; `seam` duplicates the
+// first column as a last one (a UV seam); `caps` adds a centre vertex and a
+// fan at each end.
 inline Tube tube_geometry(int rings, int segments, float length, float radius, bool seam, bool caps,
                           float blend = 0.3f) {
+  gatcore::character::TubeOptions o;
+  o.rings = rings, o.segments = segments, o.length = length, o.radius = radius;
+  o.seam = seam, o.caps = caps, o.blend = blend;
+  const gatcore::character::TubeMesh m = gatcore::character::tube_mesh(o);
   Tube t;
-  const int cols = segments + (seam ? 1 : 0);
-  for (int r = 0; r < rings; ++r) {
-    const float y = length * r / (rings - 1);
-    const float s = blend > 0.0f ? std::clamp((y / length - 0.5f + 0.5f * blend) / blend, 0.0f, 1.0f)
-                                  : (y / length < 0.5f ? 0.0f : 1.0f);  // blend over the middle
-    for (int c = 0; c < cols; ++c) {
-      const float a = 2.0f * 3.14159265358979f * (c % segments) / segments;
-      t.pos.insert(t.pos.end(), {radius * std::cos(a), y, radius * std::sin(a)});
+  t.pos = m.positions;
+  t.tris = m.triangles;
+  const std::size_t ring_vertices = std::size_t(rings) * std::size_t(segments + (seam ? 1 : 0));
+  for (std::size_t v = 0; v < m.bone1_weight.size(); ++v) {
+    const float w = m.bone1_weight[v];
+    if (v < ring_vertices) {
       t.joints.insert(t.joints.end(), {0, 1, 0, 0});
-      t.weights.insert(t.weights.end(), {1.0f - s, s, 0.0f, 0.0f});
-    }
-  }
-  auto id = [&](int r, int c) { return r * cols + (seam ? c : c % segments); };
-  for (int r = 0; r + 1 < rings; ++r)
-    for (int c = 0; c < segments; ++c) {
-      const int a = id(r, c), b = id(r, c + 1), d = id(r + 1, c), e = id(r + 1, c + 1);
-      t.tris.insert(t.tris.end(), {a, d, b, b, d, e});
-    }
-  if (caps) {
-    for (int end = 0; end < 2; ++end) {
-      const int r = end ? rings - 1 : 0;
-      const int centre = static_cast<int>(t.pos.size() / 3);
-      t.pos.insert(t.pos.end(), {0.0f, end ? length : 0.0f, 0.0f});
-      t.joints.insert(t.joints.end(), {static_cast<std::uint16_t>(end), 0, 0, 0});
+      t.weights.insert(t.weights.end(), {1.0f - w, w, 0.0f, 0.0f});
+    } else {  // a cap's centre: all on its end's joint
+      t.joints.insert(t.joints.end(), {static_cast<std::uint16_t>(w > 0.5f ? 1 : 0), 0, 0, 0});
       t.weights.insert(t.weights.end(), {1.0f, 0.0f, 0.0f, 0.0f});
-      for (int c = 0; c < segments; ++c) {
-        if (end) t.tris.insert(t.tris.end(), {centre, id(r, c + 1), id(r, c)});
-        else t.tris.insert(t.tris.end(), {centre, id(r, c), id(r, c + 1)});
-      }
     }
   }
   return t;
 }
 
-// A Mesh + Skeleton of the capped tube (no seam), joints root and bone1.
+// The capped tube (no seam) as a Character, joints root and bone1.
 // `blend`: fraction of the length over which the weights go from root to
 // bone1 (0: rigid, a step at the middle).
 inline gatcore::character::Character tube_character(int rings = 24, int segments = 24, float length = 2.0f,
                                                     float radius = 0.25f, float blend = 0.3f) {
-  using namespace gatcore::character;
-  const Tube t = tube_geometry(rings, segments, length, radius, false, true, blend);
-  Character ch;
-  ch.name = "tube";
-  ch.mesh.positions = t.pos;
-  ch.mesh.triangles = t.tris;
-  const std::size_t n = t.pos.size() / 3;
-  for (std::size_t v = 0; v < n; ++v) {
-    for (int k = 0; k < 4; ++k)
-      if (t.weights[4 * v + k] > 0.0f) {
-        ch.mesh.weights.joint.push_back(t.joints[4 * v + k]);
-        ch.mesh.weights.weight.push_back(t.weights[4 * v + k]);
-      }
-    ch.mesh.weights.ptr.push_back(static_cast<std::int64_t>(ch.mesh.weights.joint.size()));
-    ch.welded_from_file.push_back(static_cast<std::int32_t>(v));
-  }
-  Skeleton& s = ch.skeleton;
-  s.names = {"root", "bone1"};
-  s.parents = {-1, 0};
-  s.rest_local.resize(2);
-  s.rest_local[1].translation = {0.0f, length / 2, 0.0f};
-  s.root_parent = {mat4_identity(), mat4_identity()};
-  s.inverse_bind = {mat4_identity(), inverse(to_matrix(s.rest_local[1]))};
-  return ch;
+  gatcore::character::TubeOptions o;
+  o.rings = rings, o.segments = segments, o.length = length, o.radius = radius, o.blend = blend;
+  o.caps = true;
+  return gatcore::character::tube_character(o);
 }
 
 struct GlbOptions {

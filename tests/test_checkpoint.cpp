@@ -115,6 +115,38 @@ TEST_CASE("resuming from a checkpoint gives the same next epoch as uninterrupted
   std::remove(path.c_str());
 }
 
+TEST_CASE("a checkpoint says how far its trainer got") {
+  ModelConfig cfg = small_config("densegats");
+  auto data = data_for(cfg);
+  Normaliser norm = Normaliser::fit(data, true);
+  TrainOptions o = TrainOptions::defaults_for(cfg);
+  o.batch_size = 2;
+  o.lr = 3e-3f;
+  auto m = make_model(cfg, 5);
+  Trainer t(*m, o, norm);
+  t.run_epoch(data);
+  t.run_epoch(data);
+  const std::string path = tmp_path("progress");
+  save_checkpoint(path, *m, norm, &t);
+  const TrainingProgress p = read_training_progress(load_checkpoint(path).file, path);
+  CHECK(p.epoch == 2);
+  CHECK(p.lr == double(t.optimiser().lr()));
+  CHECK(p.adam_steps == t.optimiser().steps());
+  CHECK(p.adam_steps > 0);
+  CHECK(p.resumable);
+  // A model saved without its trainer: nothing to resume from.
+  save_checkpoint(path, *m, norm, nullptr);
+  const TrainingProgress bare = read_training_progress(load_checkpoint(path).file, path);
+  CHECK(bare.epoch == 0);
+  CHECK(bare.lr < 0);
+  CHECK(bare.adam_steps == 0);
+  CHECK_FALSE(bare.resumable);
+  std::remove(path.c_str());
+  CheckpointFile edited;
+  edited.metadata = {{"epoch", "2"}, {"lr", "nan"}};
+  CHECK_THROWS_WITH(read_training_progress(edited, "e.gcm"), Catch::Contains("e.gcm") && Catch::Contains("lr"));
+}
+
 TEST_CASE("bad checkpoint files are rejected with messages naming the file and the problem") {
   ModelConfig cfg = small_config("densegats");
   auto m = make_model(cfg, 1);

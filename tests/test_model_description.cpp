@@ -49,7 +49,12 @@ TEST_CASE("model description: a dataset displacement model round trips") {
   CHECK(r.feature_layout == d.feature_layout);
   CHECK(r.data_path == d.data_path);
   CHECK(r.data_hash == d.data_hash);
+  CHECK(r.data == "dataset");
   CHECK_FALSE(r.world_columns_ignored.has_value());
+  // The tube data's words, and a file that records none.
+  CHECK(read_model_description(file_of(model_description_metadata(ModelDescription{})), "t.gcm").data ==
+        "embedded tube character");
+  CHECK(read_model_description(file_of({}), "o.gcm").data.empty());
 }
 
 TEST_CASE("model description: skin-weight, any-skeleton, nearest-joint and tube models") {

@@ -142,6 +142,16 @@ TEST_CASE("training run: --keep-best's figure and --world-columns") {
   CHECK(check_world_columns(config("skinweights-any"), r, true, false).empty());
 }
 
+namespace {
+
+models::CheckpointFile file_of_record(const RunRecord& rec) {
+  models::CheckpointFile f;
+  f.metadata = training_run_metadata(rec);
+  return f;
+}
+
+}  // namespace
+
 TEST_CASE("training run: the record in the checkpoint") {
   RunRecord rec;
   rec.seed = 3, rec.samples = 16, rec.batch = 2, rec.sample_vertices = 2048;
@@ -184,6 +194,34 @@ TEST_CASE("training run: the record in the checkpoint") {
   record_init(again, "", nullptr, &resumed);
   CHECK(again.init_path == "/abs/a.gcm");
   CHECK(again.init_epoch == "5");
+  // The whole record read back in one place (gat info, a resume's history).
+  rec.init_path = "/abs/a.gcm", rec.init_epoch = "5", rec.loss_history = "1,0.5,0.25,0.001,1.5,,";
+  const RunRecord back = read_run_record(file_of_record(rec), "m.gcm");
+  CHECK(back.seed == 3);
+  CHECK(back.samples == 16);
+  CHECK(back.batch == 2);
+  CHECK(back.sample_vertices == 2048);
+  CHECK(back.sampling == models::Sampling::random);
+  CHECK(back.schedule == models::Schedule::cosine);
+  CHECK(back.precision == Precision::fp32);
+  CHECK(back.precision_requested == Precision::bf16);
+  CHECK(back.init_path == rec.init_path);
+  CHECK(back.init_epoch == "5");
+  CHECK(back.loss_history == rec.loss_history);
+  // Older checkpoints and students: the defaults, the requested precision the one that ran.
+  models::CheckpointFile old;
+  old.metadata = {{"precision", "bf16"}};
+  const RunRecord o = read_run_record(old, "old.gcm");
+  CHECK(o.precision == Precision::bf16);
+  CHECK(o.precision_requested == Precision::bf16);
+  CHECK(o.loss_history.empty());
+  CHECK(o.init_path.empty());
+  old.metadata = {{"precision", "fp16"}};
+  CHECK_THROWS_WITH(read_run_record(old, "old.gcm"), Catch::Contains("old.gcm: metadata precision"));
+  old.metadata = {{"sampling", "every"}};
+  CHECK_THROWS_WITH(read_run_record(old, "old.gcm"), Catch::Contains("old.gcm: metadata sampling"));
+  old.metadata = {{"batch", "2x"}};
+  CHECK_THROWS_WITH(read_run_record(old, "old.gcm"), Catch::Contains("old.gcm") && Catch::Contains("batch"));
   const auto d = distillation_metadata(4, "/t/teacher.gcm", 0.25);
   CHECK(d.at("seed") == "4");
   CHECK(d.at("distilled_from") == "/t/teacher.gcm");

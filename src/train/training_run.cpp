@@ -1,6 +1,8 @@
 #include "gatcore/train/training_run.hpp"
 
+#include <cstdint>
 #include <filesystem>
+#include <limits>
 
 #include "gatcore/error.hpp"
 #include "gatcore/models/model_kind.hpp"
@@ -141,6 +143,38 @@ std::map<std::string, std::string> training_run_metadata(const RunRecord& rec) {
   if (!rec.init_epoch.empty()) md["init_epoch"] = rec.init_epoch;
   if (!rec.loss_history.empty()) md["loss_history"] = rec.loss_history;
   return md;
+}
+
+RunRecord read_run_record(const models::CheckpointFile& f, const std::string& path) {
+  const auto& md = f.metadata;
+  const auto value = [&](const char* key) {
+    const auto it = md.find(key);
+    return it == md.end() ? std::string() : it->second;
+  };
+  const auto what = [&](const char* key) { return path + ": metadata " + key; };
+  constexpr std::int64_t kMax = std::numeric_limits<std::int32_t>::max();
+  RunRecord rec;
+  if (md.count("seed")) rec.seed = long(models::metadata_integer(md, "seed", 0, kMax, path));
+  if (md.count("samples")) rec.samples = long(models::metadata_integer(md, "samples", 0, kMax, path));
+  if (md.count("batch")) rec.batch = int(models::metadata_integer(md, "batch", 0, kMax, path));
+  if (md.count("sample_vertices"))
+    rec.sample_vertices = models::metadata_integer(md, "sample_vertices", 0, std::int64_t(1) << 52, path);
+  if (md.count("sampling")) {
+    try {
+      rec.sampling = models::sampling_from_name(md.at("sampling"));
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(what("sampling") + ": " + e.what());
+    }
+  }
+  if (md.count("lr_schedule")) rec.schedule = models::schedule_from_name(md.at("lr_schedule"), what("lr_schedule").c_str());
+  if (md.count("precision")) rec.precision = parse_precision(md.at("precision"), what("precision").c_str());
+  rec.precision_requested = md.count("precision_requested")
+                                ? parse_precision(md.at("precision_requested"), what("precision_requested").c_str())
+                                : rec.precision;
+  rec.init_path = value("init");
+  rec.init_epoch = value("init_epoch");
+  rec.loss_history = value("loss_history");
+  return rec;
 }
 
 std::map<std::string, std::string> distillation_metadata(long seed, const std::string& teacher_path, double hard) {

@@ -71,4 +71,15 @@ void restore_training_state(const CheckpointFile& f, Trainer& t, const std::stri
   if (!is) fail(path, "corrupted rng state");
 }
 
+TrainingProgress read_training_progress(const CheckpointFile& f, const std::string& path) {
+  const auto& m = f.metadata;
+  TrainingProgress p;
+  if (m.count("epoch")) p.epoch = int(metadata_integer(m, "epoch", 0, std::numeric_limits<int>::max(), path));
+  if (m.count("lr")) p.lr = metadata_number(m, "lr", 0.0, 1e6, path);
+  if (m.count("adam_steps")) p.adam_steps = metadata_integer(m, "adam_steps", 0, std::int64_t(1) << 52, path);
+  for (const auto& [name, t] : f.tensors)
+    if (name.rfind("optim.", 0) == 0 && t.numel() > 0) p.resumable = true;
+  return p;
+}
+
 }  // namespace gatcore::models

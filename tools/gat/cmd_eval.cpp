@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cli_util.hpp"
+#include "gatcore/character/data/tube_data.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 #include "eval_motion.hpp"
@@ -24,7 +25,6 @@
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/train.hpp"
 #include "gatcore/vulkan.hpp"
-#include "tube_data.hpp"
 
 using namespace gatcore;
 using namespace gatcore::models;
@@ -214,9 +214,9 @@ int run_eval(const EvalArgs& a) {
       return 2;
     }
   } else {
-    GATCORE_CHECK(cfg.in_dim == demo::kTubeFeatures, "model '", path, "' takes ", cfg.in_dim,
-                  " features; the embedded tube data has ", demo::kTubeFeatures);
-    samples_ = demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed));
+    GATCORE_CHECK(cfg.in_dim == character::kTubeFeatures, "model '", path, "' takes ", cfg.in_dim,
+                  " features; the embedded tube data has ", character::kTubeFeatures);
+    samples_ = character::tube_samples(cfg.task, int(samples), std::uint64_t(seed));
   }
   const auto& data_ = samples_;
   m.to(dev);

@@ -17,7 +17,9 @@
 #include "gatcore/character/deform/detail_distortion.hpp"
 #include "gatcore/character/io/bake.hpp"
 #include "gatcore/character/io/motion_source.hpp"
+#include "gatcore/character/features/nearest_joints.hpp"
 #include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/inference/model_description.hpp"
 #include "gatcore/character/io/import.hpp"
 #include "gatcore/character/rig/motion.hpp"
 #include "gatcore/character/features/features.hpp"
@@ -26,6 +28,10 @@
 #include "progress.hpp"
 #include "gatcore/error.hpp"
 #include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/model_kind.hpp"
+#include "gatcore/models/train.hpp"
+#include "gatcore/precision.hpp"
+#include "gatcore/train/training_run.hpp"
 
 using namespace gatcore::character;
 
@@ -159,75 +165,64 @@ void print_point_cache(const std::string& path, const PointCache& pc) {
   }
 }
 
-std::string metadata(const gatcore::models::CheckpointFile& f, const char* key, const char* fallback = "-") {
-  const auto it = f.metadata.find(key);
-  return it == f.metadata.end() ? fallback : it->second;
-}
-
 // A checkpoint: loading it fully checks the file (magic, checksum, every
-// tensor against the configuration) before anything is printed.
+// tensor against the configuration) before anything is printed; what it
+// records is read by the library (model, trainer, run, model description).
 void print_model(const std::string& path) {
-  const gatcore::models::LoadedModel l = gatcore::models::load_checkpoint(path);
-  const gatcore::models::ModelConfig& c = l.model->config();
+  namespace models = gatcore::models;
+  const models::LoadedModel l = models::load_checkpoint(path);
+  const models::ModelConfig& c = l.model->config();
+  const ModelDescription d = read_model_description(l.file, path);
+  const models::TrainingProgress progress = models::read_training_progress(l.file, path);
+  const gatcore::train::RunRecord run = gatcore::train::read_run_record(l.file, path);
   std::int64_t params = 0;
   for (const auto& p : l.model->parameters()) params += p.value().rows() * p.value().cols();
-  std::int64_t optim = 0;
-  for (const auto& [name, t] : l.file.tensors)
-    if (name.rfind("optim.", 0) == 0) optim += t.rows() * t.cols();
   std::printf("model      %s (%s), %lld parameters\n", c.name.c_str(),
-              c.task == gatcore::models::Task::weights ? "skin weights" : "displacement",
-              static_cast<long long>(params));
-  // Older checkpoints have no "features" key: a dataset model's features
-  // follow its task (as predict-weights / deform read them).
-  std::string features = metadata(l.file, "features", "");
-  if (features.empty())
-    features = !l.file.metadata.count("data_path") ? "tube"
-               : c.task == gatcore::models::Task::weights ? "neuroskinning" : "densegats";
-  if (const std::string jc = metadata(l.file, "joint_columns", ""); jc.rfind("nearest:", 0) == 0)
-    features += ", joint columns " + jc + " (each vertex's nearest joints: any skeleton)";
-  if (const std::string scales = metadata(l.file, "distortion_scales", ""); !scales.empty())
-    features += " + detail distortion at smoothing scales " + scales;
-  if (gatcore::models::any_skeleton(c.kind()))
-    features += gatcore::character::ignores_world_columns(l.norm)
+              c.task == models::Task::weights ? "skin weights" : "displacement", static_cast<long long>(params));
+  std::string features = feature_kind_name(d.features);
+  if (d.nearest_joints > 0)
+    features += ", joint columns " + format_joint_columns(d.nearest_joints) +
+                " (each vertex's nearest joints: any skeleton)";
+  if (!d.distortion_scales.empty())
+    features += " + detail distortion at smoothing scales " + format_distortion_scales(d.distortion_scales);
+  if (models::any_skeleton(c.kind()))
+    features += ignores_world_columns(l.norm)
                     ? "; the vertex's world-frame position and normal ignored (--world-columns ignore): the same "
                       "weights whichever way a character faces"
                     : "; reads the vertex's world-frame position and normal (--world-columns use)";
   std::printf("features   %lld in, %lld out (%s)\n", static_cast<long long>(c.in_dim), static_cast<long long>(c.out_dim),
               features.c_str());
   std::printf("config\n");
-  const std::string cfg = metadata(l.file, "config");
+  const std::string cfg = c.to_text();
   for (std::size_t a = 0; a < cfg.size();) {
     const std::size_t b = std::min(cfg.find('\n', a), cfg.size());
     if (b > a) std::printf("  %s\n", cfg.substr(a, b - a).c_str());
     a = b + 1;
   }
-  std::printf("trained    %s epochs, lr %s, %s Adam steps%s\n", metadata(l.file, "epoch", "0").c_str(),
-              metadata(l.file, "lr").c_str(), metadata(l.file, "adam_steps", "0").c_str(),
-              optim ? " (resumable: optimiser state saved)" : "");
+  std::printf("trained    %d epochs, lr %s, %lld Adam steps%s\n", progress.epoch,
+              progress.lr < 0 ? "-" : models::metadata_text(progress.lr).c_str(),
+              static_cast<long long>(progress.adam_steps),
+              progress.resumable ? " (resumable: optimiser state saved)" : "");
   // Checkpoints from before gat train --precision trained in fp32.
-  std::printf("precision  %s training products", metadata(l.file, "precision", "fp32").c_str());
-  if (l.file.metadata.count("precision_requested"))
-    std::printf(" (%s requested; this machine ran fp32)", l.file.metadata.at("precision_requested").c_str());
+  std::printf("precision  %s training products", gatcore::precision_name(run.precision));
+  if (run.precision_requested != run.precision)
+    std::printf(" (%s requested; this machine ran fp32)", gatcore::precision_name(run.precision_requested));
   std::printf("\n");
-  std::printf("data       %s", metadata(l.file, "data").c_str());
-  if (l.file.metadata.count("data_path")) std::printf(" %s", l.file.metadata.at("data_path").c_str());
+  std::printf("data       %s", d.data.empty() ? "-" : d.data.c_str());
+  if (!d.data_path.empty()) std::printf(" %s", d.data_path.c_str());
   std::printf("\n");
-  if (l.file.metadata.count("skeleton")) {
-    const std::string& sk = l.file.metadata.at("skeleton");
-    const bool nearest = metadata(l.file, "joint_columns", "").rfind("nearest:", 0) == 0;
-    std::printf("bones      %lld (%s%s)%s\n", static_cast<long long>(std::count(sk.begin(), sk.end(), ',') + (sk.empty() ? 0 : 1)),
-                sk.substr(0, 60).c_str(), sk.size() > 60 ? ", ..." : "",
+  if (!d.skeleton.empty()) {
+    const std::string sk = joined_bone_names(d.skeleton);
+    const bool nearest = d.nearest_joints > 0;
+    std::printf("bones      %zu (%s%s)%s\n", d.skeleton.size(), sk.substr(0, 60).c_str(), sk.size() > 60 ? ", ..." : "",
                 nearest ? ": the training data's skeleton, not matched (nearest-joint columns)" : "");
-    if (!nearest) {
-      const std::size_t nb = std::size_t(std::count(sk.begin(), sk.end(), ',') + (sk.empty() ? 0 : 1));
-      const BonePresence p = checkpoint_bone_presence(l.file, path, nb);
-      if (!p.count.empty())
-        std::printf("           %lld had by all %d training characters (a character lacking one gets a warning)\n",
-                    static_cast<long long>(std::count(p.count.begin(), p.count.end(), p.characters)), p.characters);
-    }
+    const BonePresence& p = d.bone_presence;
+    if (!nearest && !p.count.empty())
+      std::printf("           %lld had by all %d training characters (a character lacking one gets a warning)\n",
+                  static_cast<long long>(std::count(p.count.begin(), p.count.end(), p.characters)), p.characters);
   }
-  if (l.file.metadata.count("loss_history")) {
-    const auto h = parse_history(l.file.metadata.at("loss_history"), path);
+  if (!run.loss_history.empty()) {
+    const auto h = parse_history(run.loss_history, path);
     if (!h.empty()) {
       std::printf("loss       %zu epochs recorded; last: train %.6g", h.size(), h.back().train);
       if (h.back().val >= 0) std::printf(", validation %.6g", h.back().val);

@@ -2,7 +2,7 @@
 // validation every epoch, a resumable checkpoint every epoch and Ctrl-C
 // handling. It trains on a dataset of the character pipeline (--data, see
 // character/data/training_data.hpp) or on the embedded tube character
-// (tube_data.hpp).
+// (character/data/tube_data.hpp).
 
 #include <chrono>
 #include <cmath>
@@ -17,6 +17,7 @@
 #include <omp.h>
 
 #include "cli_util.hpp"
+#include "gatcore/character/data/tube_data.hpp"
 #include "commands.hpp"
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/dataset_model_description.hpp"
@@ -34,7 +35,6 @@
 #include "gatcore/models/linear_skip.hpp"
 #include "gatcore/train/training_run.hpp"
 #include "gatcore/vulkan.hpp"
-#include "tube_data.hpp"
 
 using namespace gatcore;
 using namespace gatcore::models;
@@ -278,11 +278,11 @@ int run_train(TrainArgs a) {
     request.nearest_joint_columns = td->nearest_joints > 0;
   }
   if (from.empty()) {
-    ModelConfig cfg = ModelConfig::defaults(model_name, demo::kTubeFeatures);
+    ModelConfig cfg = ModelConfig::defaults(model_name, character::kTubeFeatures);
     if (!task.empty()) cfg.task = task == "weights" ? Task::weights : Task::displacement;
     if (const std::string why = train::check_new_model_options(cfg, request); !why.empty()) return refuse(why);
     if (td) cfg.in_dim = td->feature_dim(cfg.task);
-    cfg.out_dim = cfg.task == Task::weights ? (td ? td->super.num_bones() : demo::kTubeBones) : 3;
+    cfg.out_dim = cfg.task == Task::weights ? (td ? td->super.num_bones() : character::kTubeBones) : 3;
     if (any_skeleton(cfg.kind())) {  // its columns are each vertex's own nearest bones, not the super skeleton
       cfg.in_dim = character::bone_candidate_feature_dim(character::kDefaultCandidates);
       cfg.out_dim = character::kDefaultCandidates;
@@ -315,9 +315,9 @@ int run_train(TrainArgs a) {
     return character::training_samples(*td, cfg.task, part, epoch, geodesic_k, int(samples), build, making.callback());
   };
   std::vector<Sample> train = td ? data_samples(character::DatasetPart::train, 0)
-                                 : demo::tube_samples(cfg.task, int(samples), std::uint64_t(seed) * 2 + 1);
+                                 : character::tube_samples(cfg.task, int(samples), std::uint64_t(seed) * 2 + 1);
   const std::vector<Sample> val = td ? data_samples(character::DatasetPart::validation, 0)
-                                     : demo::tube_samples(cfg.task, 8, std::uint64_t(seed) * 2 + 2);
+                                     : character::tube_samples(cfg.task, 8, std::uint64_t(seed) * 2 + 2);
   if (train.empty()) {
     std::fprintf(stderr, "gat train: %s has no training samples\n", data.c_str());
     return 2;
@@ -400,7 +400,7 @@ int run_train(TrainArgs a) {
   if (td) {
     description = character::describe_dataset_model(*td, data, cfg, norm);
   } else {
-    description.skeleton = {"upper_arm", "forearm"};
+    description.skeleton = character::tube_bone_names();
   }
   const auto metadata = [&] {
     std::map<std::string, std::string> md = train::training_run_metadata(run);
@@ -408,8 +408,9 @@ int run_train(TrainArgs a) {
     return md;
   };
   std::vector<LossRecord> history;
-  if (!resume.empty() && loaded.file.metadata.count("loss_history")) {
-    history = gatcore::character::parse_history(loaded.file.metadata.at("loss_history"), resume);
+  if (!resume.empty()) {
+    const std::string h = train::read_run_record(loaded.file, resume).loss_history;
+    if (!h.empty()) history = gatcore::character::parse_history(h, resume);
     std::erase_if(history, [&](const LossRecord& r) { return r.epoch > trainer.epoch(); });
   }
   // --keep-best: the lowest validation loss (or L1) so far, a resumed run's

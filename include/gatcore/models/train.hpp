@@ -219,4 +219,17 @@ void save_checkpoint(const std::string& path, const Model& model, const Normalis
 // the trainer (the trainer must wrap the model loaded from the same file).
 void restore_training_state(const CheckpointFile& f, Trainer& trainer, const std::string& path = "checkpoint");
 
+// How far the trainer that saved a checkpoint got, for people reading the
+// file (gat info): the epoch, learning rate and Adam steps save_checkpoint
+// records, and whether the optimiser's moments are there to resume from. A
+// model saved without a trainer reads as epoch 0, no rate, 0 steps. Values
+// are parsed strictly (CheckpointError naming `path` and the key).
+struct TrainingProgress {
+  int epoch = 0;
+  double lr = -1;  // < 0: not recorded
+  std::int64_t adam_steps = 0;
+  bool resumable = false;  // the Adam moments are saved
+};
+TrainingProgress read_training_progress(const CheckpointFile& f, const std::string& path = "checkpoint");
+
 }  // namespace gatcore::models

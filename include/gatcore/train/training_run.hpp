@@ -90,6 +90,12 @@ struct RunRecord {
 void record_init(RunRecord& rec, const std::string& init, const models::CheckpointFile* init_file,
                  const models::CheckpointFile* resumed);
 std::map<std::string, std::string> training_run_metadata(const RunRecord& rec);
+// The record as a checkpoint holds it (the keys training_run_metadata
+// writes); absent keys, in checkpoints from before they existed or of a
+// distilled student, read as RunRecord's defaults (precision fp32, the
+// requested one that which ran, no history). Throws naming `path` and the
+// key for a value that does not parse.
+RunRecord read_run_record(const models::CheckpointFile& f, const std::string& path);
 // A distilled student's record: its seed, its teacher (recorded absolute) and
 // the ground-truth weight ("seed", "distilled_from", "distill_hard").
 std::map<std::string, std::string> distillation_metadata(long seed, const std::string& teacher_path, double hard);

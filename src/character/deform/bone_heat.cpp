@@ -14,21 +14,14 @@
 #include <Eigen/SparseCholesky>
 
 #include "gatcore/character/rig/limit_weights.hpp"
+#include "gatcore/character/rig/vec3.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
 
 namespace {
 
-using V3 = std::array<double, 3>;
-
-V3 sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V3 cross(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double norm(const V3& a) { return std::sqrt(dot(a, a)); }
-V3 to_v3(const Vec3& v) { return {v[0], v[1], v[2]}; }
+using V3 = Vec3d;
 
 // Closest point to p on segment [a, b]; *past_tail: how far p projects
 // beyond b along the bone (0 if it does not).
@@ -172,8 +165,8 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
   }
   const auto children = s.children();
   auto dir = [&](std::int32_t a, std::int32_t b) {
-    V3 d = sub(to_v3(head[b]), to_v3(head[a]));
-    const double l = norm(d);
+    V3 d = sub(to_double(head[b]), to_double(head[a]));
+    const double l = length(d);
     if (l > 0)
       for (double& x : d) x /= l;
     return d;
@@ -200,7 +193,7 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
     if (!children[j].empty()) continue;
     Vec3 tail = head[j];
     if (p >= 0) {
-      const double plen = norm(sub(to_v3(head[j]), to_v3(head[p])));
+      const double plen = length(sub(to_double(head[j]), to_double(head[p])));
       const Vec3 b = bone_direction(s, j, conv);
       const V3 d{b[0], b[1], b[2]};
       // glTF keeps no bone tails. Where a joint outside this chain sits on
@@ -212,8 +205,8 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
       for (std::int32_t a = j; a >= 0; a = s.parents[a]) chain[a] = 1;
       for (std::int32_t k = 0; k < nj; ++k) {
         if (chain[k]) continue;
-        const V3 v = sub(to_v3(head[k]), to_v3(head[j]));
-        const double l = norm(v);
+        const V3 v = sub(to_double(head[k]), to_double(head[j]));
+        const double l = length(v);
         if (l > 0 && l <= at_len && dot(v, d) >= 0.9 * l) at = k, at_len = l;
       }
       if (at >= 0) {
@@ -255,7 +248,7 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
       lo[c] = std::min(lo[c], pos0[v][c]);
       hi[c] = std::max(hi[c], pos0[v][c]);
     }
-  const double diag = std::max(norm(sub(hi, lo)), 1e-12);
+  const double diag = std::max(length(sub(hi, lo)), 1e-12);
   const double tol = 1e-6 * diag;
   std::vector<std::int32_t> weld(static_cast<std::size_t>(n));
   std::vector<V3> pos;
@@ -275,7 +268,7 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
             auto it = grid.find(key(cx + dx, cy + dy, cz + dz));
             if (it == grid.end()) continue;
             for (std::int32_t u : it->second)
-              if (norm(sub(pos[u], pos0[v])) <= tol) {
+              if (length(sub(pos[u], pos0[v])) <= tol) {
                 found = u;
                 break;
               }
@@ -341,10 +334,10 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
     };
     std::int32_t non_root_controls = 0;
     for (std::int32_t j = 0; j < nj && !tris.empty(); ++j) {
-      if (sk.parents[j] >= 0 && !far_outside(to_v3(segs[j].front().a))) continue;
+      if (sk.parents[j] >= 0 && !far_outside(to_double(segs[j].front().a))) continue;
       int in = 0, all = 0;
       for (const auto& sg : segs[j]) {
-        const V3 a = to_v3(sg.a), b = to_v3(sg.b);
+        const V3 a = to_double(sg.a), b = to_double(sg.b);
         for (double t = 0.1; t < 1; t += 0.2, ++all)
           in += enclosed({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])});
       }
@@ -372,8 +365,8 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
     const std::size_t before = bones.size();
     for (const auto& s : segs[j])
       if (std::find(control_heads.begin(), control_heads.end(), s.b) == control_heads.end())
-        bones.push_back({to_v3(s.a), to_v3(s.b), j});
-    if (bones.size() == before) bones.push_back({to_v3(segs[j].front().a), to_v3(segs[j].front().a), j});
+        bones.push_back({to_double(s.a), to_double(s.b), j});
+    if (bones.size() == before) bones.push_back({to_double(segs[j].front().a), to_double(segs[j].front().a), j});
   }
   GATCORE_CHECK(!bones.empty(), ch.name, ": bone heat: no joint deforms");
 
@@ -384,13 +377,13 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   std::vector<double> diagL(static_cast<std::size_t>(m), 0.0);
   for (std::size_t t = 0; t < tris.size(); t += 3) {
     const std::int32_t id[3] = {tris[t], tris[t + 1], tris[t + 2]};
-    const double a2 = norm(cross(sub(pos[id[1]], pos[id[0]]), sub(pos[id[2]], pos[id[0]])));
+    const double a2 = length(cross(sub(pos[id[1]], pos[id[0]]), sub(pos[id[2]], pos[id[0]])));
     for (int k = 0; k < 3; ++k) area[id[k]] += a2 / 6.0;
     for (int k = 0; k < 3; ++k) {
       // Angle at id[k] is opposite edge (id[k+1], id[k+2]).
       const std::int32_t o = id[k], i = id[(k + 1) % 3], j = id[(k + 2) % 3];
       const V3 u = sub(pos[i], pos[o]), w = sub(pos[j], pos[o]);
-      const double s = norm(cross(u, w));
+      const double s = length(cross(u, w));
       const double cot = s > 0 ? std::clamp(dot(u, w) / s, 0.0, 1e3) : 1e3 * (dot(u, w) > 0);
       const double x = 0.5 * cot;
       if (x == 0) continue;
@@ -446,14 +439,14 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   if (params.facing_distance) {
     for (std::size_t t = 0; t < tris.size(); t += 3) {
       V3 f = cross(sub(pos[tris[t + 1]], pos[tris[t]]), sub(pos[tris[t + 2]], pos[tris[t]]));
-      const double l = norm(f);
+      const double l = length(f);
       if (!(l > 0)) continue;
       for (double& x : f) x /= l;
       for (int k = 0; k < 3; ++k)
         for (int c = 0; c < 3; ++c) normal[tris[t + k]][c] += f[c];
     }
     for (V3& nv : normal) {
-      const double l = norm(nv);
+      const double l = length(nv);
       if (l > 0)
         for (double& x : nv) x /= l;
     }
@@ -470,7 +463,7 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
       // grows over the first 1e-3 of the diagonal past the tail, so a vertex
       // on the joint's plane is not tipped one way or the other by rounding.
       const V3 out = sub(pos[v], closest[b]);
-      double d = norm(out);
+      double d = length(out);
       // facing_distance: a bone on the side the surface faces (the normal
       // points at it: an arm seen from the chest under it, a leg from the
       // inside of the other) is that much farther, (1 + cos) / 2 with cos

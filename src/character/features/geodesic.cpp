@@ -1,16 +1,14 @@
 // Geodesic k-nearest vertices: Dijkstra on the mesh graph from every vertex,
-// stopped after k vertices are settled. oneTBB over sources (the data
-// pipeline is TBB; no OpenMP in here).
+// stopped after k vertices are settled. A kernel over sources, so OpenMP
+// (the runtime's weight prediction calls it and links no oneTBB); serial
+// inside a dataset pipeline task (SerialRegion), never nested in oneTBB.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <queue>
 
-#include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
-
 #include "gatcore/character/features/features.hpp"
+#include "gatcore/character/rig/parallel.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -32,51 +30,46 @@ std::vector<std::vector<std::int32_t>> geodesic_knn_lists(std::span<const float>
       for (int c = 0; c < 3; ++c) d2 += (double)(positions[3 * i + c] - positions[3 * j + c]) * (positions[3 * i + c] - positions[3 * j + c]);
       len[e] = static_cast<float>(std::sqrt(d2));
     }
-  struct Scratch {
-    std::vector<float> dist;
-    std::vector<char> settled;
-    std::vector<std::int32_t> touched;
-  };
-  tbb::enumerable_thread_specific<Scratch> scratch([n] {
-    Scratch s;
-    s.dist.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::infinity());
-    s.settled.assign(static_cast<std::size_t>(n), 0);
-    return s;
-  });
   std::vector<std::vector<std::int32_t>> out(static_cast<std::size_t>(n));
-  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, n, 64), [&](const tbb::blocked_range<std::int64_t>& r) {
-    Scratch& s = scratch.local();
+  // Each source's list depends on nothing but the graph, so any schedule
+  // gives the same lists; the scratch arrays are per thread.
+#pragma omp parallel if (!SerialRegion::active())
+  {
+    std::vector<float> dist(static_cast<std::size_t>(n), std::numeric_limits<float>::infinity());
+    std::vector<char> settled(static_cast<std::size_t>(n), 0);
+    std::vector<std::int32_t> touched;
     using Item = std::pair<float, std::int32_t>;
-    for (std::int64_t src = r.begin(); src != r.end(); ++src) {
+#pragma omp for schedule(dynamic, 64)
+    for (std::int64_t src = 0; src < n; ++src) {
       std::priority_queue<Item, std::vector<Item>, std::greater<Item>> pq;
-      auto& res = out[src];
+      auto& res = out[static_cast<std::size_t>(src)];
       res.reserve(static_cast<std::size_t>(k));
-      s.dist[src] = 0.0f;
-      s.touched.push_back(static_cast<std::int32_t>(src));
+      dist[static_cast<std::size_t>(src)] = 0.0f;
+      touched.push_back(static_cast<std::int32_t>(src));
       pq.push({0.0f, static_cast<std::int32_t>(src)});
       while (!pq.empty() && static_cast<int>(res.size()) < k) {
         const auto [d, u] = pq.top();
         pq.pop();
-        if (s.settled[u]) continue;
-        s.settled[u] = 1;
+        if (settled[u]) continue;
+        settled[u] = 1;
         res.push_back(u);
         for (std::int64_t e = g.indptr[u]; e < g.indptr[u + 1]; ++e) {
           const std::int32_t w = g.indices[e];
           const float nd = d + len[e];
-          if (!s.settled[w] && nd < s.dist[w]) {
-            if (s.dist[w] == std::numeric_limits<float>::infinity()) s.touched.push_back(w);
-            s.dist[w] = nd;
+          if (!settled[w] && nd < dist[w]) {
+            if (dist[w] == std::numeric_limits<float>::infinity()) touched.push_back(w);
+            dist[w] = nd;
             pq.push({nd, w});
           }
         }
       }
-      for (std::int32_t t : s.touched) {
-        s.dist[t] = std::numeric_limits<float>::infinity();
-        s.settled[t] = 0;
+      for (std::int32_t t : touched) {
+        dist[t] = std::numeric_limits<float>::infinity();
+        settled[t] = 0;
       }
-      s.touched.clear();
+      touched.clear();
     }
-  });
+  }
   return out;
 }
 

@@ -136,6 +136,7 @@ ModelDescription read_model_description(const models::CheckpointFile& f, const s
   d.feature_layout = value("feature_layout");
   d.data_path = value("data_path");
   d.data_hash = value("data_hash");
+  d.data = value("data");
   return d;
 }
 

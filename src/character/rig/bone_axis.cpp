@@ -5,21 +5,22 @@
 #include <cmath>
 #include <vector>
 
+#include "gatcore/character/rig/vec3.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
 
 namespace {
 
-using V3 = std::array<double, 3>;
+using V3 = Vec3d;
 
+// d / |d| by division per component (not normalise's reciprocal: the vote's
+// directions stay as they were measured); the zero vector stays zero.
 V3 unit(V3 d) {
-  const double l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const double l = length(d);
   for (double& x : d) x = l > 0 ? x / l : 0.0;
   return d;
 }
-
-double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // Signed local axis a of a bind frame (a / 2: X, Y, Z; odd: negative).
 V3 frame_axis(const Mat4& bind, int a) {

@@ -4,6 +4,7 @@
 
 #include "gatcore/character/rig/motion.hpp"
 #include "gatcore/character/rig/rig_convention.hpp"
+#include "gatcore/character/rig/vec3.hpp"
 #include "gatcore/error.hpp"
 
 namespace gatcore::character {
@@ -35,23 +36,20 @@ Quat conj(const Quat& q) { return {-q[0], -q[1], -q[2], q[3]}; }
 // The smallest rotation taking direction a to direction b.
 Quat rotation_between(Vec3 a, Vec3 b) {
   auto norm = [](Vec3& v) {
-    const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    const float l = length(v);
     if (l > 0.0f)
       for (float& x : v) x /= l;
     return l > 0.0f;
   };
   if (!norm(a) || !norm(b)) return {0.0f, 0.0f, 0.0f, 1.0f};
-  const float d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-  Vec3 c = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  const float d = dot(a, b);
+  Vec3 c = cross(a, b);
   if (d < -0.999999f) {  // opposite: any perpendicular axis
     c = std::abs(a[0]) < 0.9f ? Vec3{0.0f, -a[2], a[1]} : Vec3{-a[2], 0.0f, a[0]};
     return quat_from_axis_angle(c, 3.14159265358979f);
   }
   return quat_normalize({c[0], c[1], c[2], 1.0f + d});
 }
-
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
 
 }  // namespace
 

@@ -72,6 +72,10 @@ struct ModelDescription {
   // The training dataset ("data_path", absolute, and its hash); empty: the
   // embedded tube character.
   std::string data_path, data_hash;
+  // What it was trained on in words ("data", for people reading the file:
+  // "dataset" or "embedded tube character", written from data_path); empty
+  // when the file has no such entry.
+  std::string data;
 };
 
 // The metadata entries of `d` (the keys above; the conditional ones only where they apply).

@@ -1,25 +1,53 @@
 #pragma once
-// 3-vector arithmetic on Vec3 (rig/transform.hpp), in float, written out
-// component by component: the one copy the character pipeline uses.
+// 3-vector arithmetic on std::array<T, 3>: Vec3 (float, rig/transform.hpp)
+// and Vec3d (double: the geometry of bone heat and the bone-axis vote),
+// written out component by component in one fixed order, so a result is
+// bitwise the same wherever it is computed: the one copy the character
+// pipeline uses.
+#include <array>
 #include <cmath>
+#include <type_traits>
 
 #include "gatcore/character/rig/transform.hpp"
 
 namespace gatcore::character {
 
-inline Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-inline Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-inline Vec3 scale(const Vec3& a, float s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-inline float dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-inline Vec3 cross(const Vec3& a, const Vec3& b) {
+using Vec3d = std::array<double, 3>;
+
+template <class T>
+inline std::array<T, 3> add(const std::array<T, 3>& a, const std::array<T, 3>& b) {
+  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+}
+template <class T>
+inline std::array<T, 3> sub(const std::array<T, 3>& a, const std::array<T, 3>& b) {
+  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+template <class T>
+inline std::array<T, 3> scale(const std::array<T, 3>& a, std::type_identity_t<T> s) {
+  return {a[0] * s, a[1] * s, a[2] * s};
+}
+template <class T>
+inline T dot(const std::array<T, 3>& a, const std::array<T, 3>& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+template <class T>
+inline std::array<T, 3> cross(const std::array<T, 3>& a, const std::array<T, 3>& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
-inline float length(const Vec3& a) { return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
-inline float distance(const Vec3& a, const Vec3& b) { return length(sub(a, b)); }
-// a / |a|; the zero vector stays zero.
-inline Vec3 normalise(const Vec3& a) {
-  const float l = length(a);
-  return l > 0.0f ? scale(a, 1.0f / l) : a;
+template <class T>
+inline T length(const std::array<T, 3>& a) {
+  return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
 }
+template <class T>
+inline T distance(const std::array<T, 3>& a, const std::array<T, 3>& b) {
+  return length(sub(a, b));
+}
+// a / |a| (as a times 1 / |a|); the zero vector stays zero.
+template <class T>
+inline std::array<T, 3> normalise(const std::array<T, 3>& a) {
+  const T l = length(a);
+  return l > T(0) ? scale(a, T(1) / l) : a;
+}
+inline Vec3d to_double(const Vec3& v) { return {v[0], v[1], v[2]}; }
 
 }  // namespace gatcore::character
