@@ -6,7 +6,7 @@
 #
 #   examples/experiments/unseen_skeletons.sh [--folds "women creatures khronos"] [--minutes M]
 #       [--sampling consecutive|random|full] [--pair-scorer W,...] [--world-columns ignore|use]
-#       [--precision fp32|bf16] [--seed S] [--heat-blend S]
+#       [--precision fp32|bf16] [--seed S] [--heat-blend S] [--augment KINDS [--augment-copies N]]
 #       [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
@@ -41,6 +41,12 @@
 # --heat-blend S also evaluates the same checkpoint with its weights mixed
 # with bone heat's, (1 - S) * model + S * bone heat per vertex (gat eval
 # --heat-blend), as the method skinweights-any+heat in the tables.
+# --augment KINDS adds --augment-copies (default 2) augmented variants of
+# every *training* character (gat dataset build --augment KINDS, seeded by
+# --seed; docs/experiments/augmentations.md): the variants of the validation
+# and test characters are dropped, so no variant of a test family is ever
+# trained on and the validation and test sets are the unaugmented ones of the
+# run without --augment.
 # --precision bf16 trains both models with bf16 products
 # (gat train --precision; fp32 where the CPU lacks AVX512_BF16, as gat train
 # says). The super-skeleton models
@@ -56,7 +62,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= world_columns= precision=fp32
-heat_blend=
+heat_blend= augment= augment_copies=2
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/tools/gat"
@@ -72,6 +78,8 @@ while [ $# -gt 0 ]; do
     --world-columns) world_columns="${2:?--world-columns needs ignore or use}"; shift 2 ;;
     --precision) precision="${2:?--precision needs fp32 or bf16}"; shift 2 ;;
     --heat-blend) heat_blend="${2:?--heat-blend needs a share in (0, 1]}"; shift 2 ;;
+    --augment) augment="${2:?--augment needs a list of kinds}"; shift 2 ;;
+    --augment-copies) augment_copies="${2:?--augment-copies needs a count}"; shift 2 ;;
     --out) out="${2:?--out needs a directory}"; shift 2 ;;
     --data) data="${2:?--data needs a directory}"; shift 2 ;;
     --gat) gat="${2:?--gat needs a path}"; shift 2 ;;
@@ -133,8 +141,25 @@ for fold in $folds; do
     done
   done
   "$gat" dataset build --seed "$seed" -o "$dir/dataset.json" --validation-characters "$val" \
-    --test-characters "$test" "${files[@]}" >"$dir/dataset.log" 2>&1 \
-    || { cat "$dir/dataset.log" >&2; die "dataset build of $fold failed"; }
+    --test-characters "$test" ${augment:+--augment "$augment" --augment-copies "$augment_copies" --augment-seed "$seed"} \
+    "${files[@]}" >"$dir/dataset.log" 2>&1 || { cat "$dir/dataset.log" >&2; die "dataset build of $fold failed"; }
+  if [ -n "$augment" ]; then  # keep the training characters' variants only
+    python3 - "$dir/dataset.json" <<'PY' || die "dropping the held-out variants of $fold failed"
+import json, os, sys
+path = sys.argv[1]
+d = json.load(open(path))
+chars, split = d["characters"], d["split"]
+train = set(split["train"])
+keep = [i for i, c in enumerate(chars) if not c.startswith("augment:") or i in train]
+new = {old: k for k, old in enumerate(keep)}
+d["characters"] = [chars[i] for i in keep]
+d["split"] = {part: [new[i] for i in idx if i in new] for part, idx in split.items()}
+tmp = path + ".tmp"
+json.dump(d, open(tmp, "w"), indent=1)
+os.replace(tmp, path)
+print(f"{path}: kept {len(keep)} of {len(chars)} characters (variants of training characters only)")
+PY
+  fi
   log "$fold: $(tail -n 1 "$dir/dataset.log")"
   "$gat" eval --baseline bone-heat --data "$dir/dataset.json" --poses "$poses" --seed "$seed" \
     --json "$dir/bone-heat.json" >"$dir/bone-heat.log" 2>&1 || { cat "$dir/bone-heat.log" >&2; die "bone heat on $fold failed"; }
