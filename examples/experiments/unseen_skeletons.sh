@@ -7,13 +7,24 @@
 #   examples/experiments/unseen_skeletons.sh [--folds "women creatures khronos"] [--minutes M]
 #       [--sampling consecutive|random|full] [--pair-scorer W,...] [--world-columns ignore|use]
 #       [--precision fp32|bf16] [--seed S] [--heat-blend S] [--augment KINDS [--augment-copies N]]
-#       [--out DIR] [--data DIR] [--gat BIN]
+#       [--corpus use|ignore|auto] [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
 # training family validates):
 #   women      train Quaternius modular men + animals + creatures, test the modular women
+#   men        train the modular women + animals + creatures, test the modular men
 #   creatures  train the modular men + women + animals, test the creatures
 #   khronos    train every Quaternius character, test the Khronos sample rigs
+#   animated_humans  (corpus) train every shared Quaternius family, test the corpus's
+#              humanoids on rigs unlike the shared ones: the 12 Animated Men/Women
+#              outfits (one 31-joint rig), Cowboy, Alien and three.js RobotExpressive
+# With --corpus use (auto: when data/characters/corpus exists) every fold also
+# trains on the corpus families other than its test family: fish (40 + 3 FBX),
+# farm_animals (FBX farm animals and pets), animated_humans, monsters (space
+# enemies, monster and fruit characters) and creature_packs (the corpus's
+# cyberpunk and platformer characters, the shared creatures' packs: never in
+# the creatures fold, neither trained on nor tested, so its test set is the
+# 11 shared creatures with or without the corpus). Khronos only ever tests.
 #   humanoids  the same-skeleton check (not an unseen skeleton): the NeuroSkinning
 #              experiment's humanoid split (train the modular men + women, validate
 #              men/Casual and women/Casual, test men/Farmer and women/Punk), where the
@@ -62,7 +73,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= world_columns= precision=fp32
-heat_blend= augment= augment_copies=2
+heat_blend= augment= augment_copies=2 corpus=auto
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/tools/gat"
@@ -78,6 +89,7 @@ while [ $# -gt 0 ]; do
     --world-columns) world_columns="${2:?--world-columns needs ignore or use}"; shift 2 ;;
     --precision) precision="${2:?--precision needs fp32 or bf16}"; shift 2 ;;
     --heat-blend) heat_blend="${2:?--heat-blend needs a share in (0, 1]}"; shift 2 ;;
+    --corpus) corpus="${2:?--corpus needs use, ignore or auto}"; shift 2 ;;
     --augment) augment="${2:?--augment needs a list of kinds}"; shift 2 ;;
     --augment-copies) augment_copies="${2:?--augment-copies needs a count}"; shift 2 ;;
     --out) out="${2:?--out needs a directory}"; shift 2 ;;
@@ -89,9 +101,16 @@ while [ $# -gt 0 ]; do
 done
 [ -x "$gat" ] || die "gat not found at $gat (build it: ninja -C build gat, or pass --gat)"
 q="$data/characters/quaternius" k="$data/characters/khronos"
+c="$data/characters/corpus"
 for d in "$q/modular_men" "$q/modular_women" "$q/animals" "$q/creatures" "$k"; do
   [ -d "$d" ] || die "data not found: $d (pass --data or set GATCORE_DATA)"
 done
+case "$corpus" in
+  use) [ -d "$c" ] || die "--corpus use: the corpus is not at $c" ;;
+  ignore) ;;
+  auto) if [ -d "$c" ]; then corpus=use; else corpus=ignore; fi ;;
+  *) die "--corpus takes use, ignore or auto, not $corpus" ;;
+esac
 command -v python3 >/dev/null || die "python3 is needed for the report"
 log() { printf '[%s] %s\n' "$(date -u +%H:%M:%S)" "$*"; }
 
@@ -109,17 +128,60 @@ check_validation() {
   log "$(basename "$d"): $m $(grep '^best validation' "$d/$m.train.log" | tail -n 1); gat eval on the validation characters: L1 $l1"
 }
 
-dir_of() { case "$1" in khronos) echo "$k" ;; *) echo "$q/$1" ;; esac; }
-train_families() {
+# family_files FAMILY: the family's files. A corpus family is one source's
+# characters (a pack, or packs of one kind and author): its members never
+# straddle training and test. creature_packs are the corpus characters of the
+# packs the shared creatures come from (cyberpunk, platformer): they never
+# train the creatures fold, and are not in its test set either, so that the
+# creatures' figures stay comparable with runs without the corpus.
+family_files() {
   case "$1" in
-    women) echo "modular_men animals creatures" ;;
-    creatures) echo "modular_men modular_women animals" ;;
-    khronos) echo "modular_men modular_women animals creatures" ;;
-    humanoids) echo "modular_men modular_women" ;;
-    *) die "unknown fold $1 (women, creatures, khronos, humanoids)" ;;
+    khronos) ls "$k"/*.glb ;;
+    modular_men | modular_women | animals | creatures) ls "$q/$1"/*.glb ;;
+    creature_packs) ls "$c"/quaternius/cyberpunk_pack_*.glb "$c"/quaternius/platformer_game_pack_*.glb ;;
+    fish) ls "$c"/quaternius/cute_fish_pack_*.glb "$c"/quaternius/fish_pack_*.glb \
+      "$c"/quaternius_fbx/Animal_Pack_Vol.2_Piranha.fbx "$c"/quaternius_fbx/Animals_Pack_Fish.fbx \
+      "$c"/quaternius_fbx/Animals_Pack_Whale.fbx ;;
+    farm_animals) ls "$c"/quaternius_fbx/Farm_Animals_*.fbx "$c"/quaternius_fbx/Animal_Pack_Vol.2_Dog.fbx \
+      "$c"/quaternius_fbx/Animals_Pack_Chick.fbx "$c"/quaternius_fbx/Animals_Pack_Red_Fox.fbx ;;
+    animated_humans) ls "$c"/quaternius_fbx/Animated_Men_*.fbx "$c"/quaternius_fbx/Animated_Women_*.fbx \
+      "$c"/quaternius_fbx/Cowboy_Pack_Cowboy.fbx "$c"/quaternius_fbx/Alien_Animated_Alien.fbx "$c"/threejs/RobotExpressive.glb ;;
+    monsters) ls "$c"/quaternius/ultimate_space_pack_*.glb "$c"/quaternius_fbx/Monster_Pack_*.fbx \
+      "$c"/quaternius_fbx/Fruit_Characters_*.fbx ;;
+    *) die "unknown family $1" ;;
   esac
 }
-test_family() { case "$1" in women) echo modular_women ;; humanoids) echo "" ;; *) echo "$1" ;; esac; }
+corpus_families() { [ "$corpus" = use ] && echo "fish farm_animals animated_humans monsters creature_packs" || true; }
+# without FAMILY...: the corpus families minus the ones named
+corpus_without() {
+  local f x keep
+  for f in $(corpus_families); do
+    keep=1
+    for x in "$@"; do [ "$f" = "$x" ] && keep=0; done
+    [ $keep = 1 ] && echo "$f"
+  done
+}
+train_families() {
+  case "$1" in
+    women) echo "modular_men animals creatures $(corpus_without)" ;;
+    men) echo "modular_women animals creatures $(corpus_without)" ;;
+    creatures) echo "modular_men modular_women animals $(corpus_without creature_packs)" ;;
+    khronos) echo "modular_men modular_women animals creatures $(corpus_without)" ;;
+    animated_humans) echo "modular_men modular_women animals creatures $(corpus_without animated_humans)" ;;
+    humanoids) echo "modular_men modular_women" ;;
+    *) die "unknown fold $1 (women, men, creatures, khronos, animated_humans, humanoids)" ;;
+  esac
+}
+test_family() {
+  case "$1" in
+    women) echo modular_women ;;
+    men) echo modular_men ;;
+    humanoids) echo "" ;;
+    animated_humans) [ "$corpus" = use ] || die "the animated_humans fold tests corpus characters: it needs --corpus use"
+      echo animated_humans ;;
+    *) echo "$1" ;;
+  esac
+}
 
 for fold in $folds; do
   dir="$out/$fold"
@@ -127,7 +189,7 @@ for fold in $folds; do
   files=() val="" test=""
   for fam in $(train_families "$fold") $(test_family "$fold"); do
     first=1
-    for f in "$(dir_of "$fam")"/*.glb; do
+    for f in $(family_files "$fam"); do
       "$gat" info "$f" >/dev/null 2>&1 || { log "skipping $f (does not load)"; continue; }
       files+=("$f")
       name="$(basename "$(dirname "$f")")/$(basename "$f")"
