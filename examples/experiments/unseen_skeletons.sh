@@ -7,7 +7,7 @@
 #   examples/experiments/unseen_skeletons.sh [--folds "women creatures khronos"] [--minutes M]
 #       [--sampling consecutive|random|full] [--pair-scorer W,...] [--world-columns ignore|use]
 #       [--precision fp32|bf16] [--seed S] [--heat-blend S] [--augment KINDS [--augment-copies N]]
-#       [--corpus use|ignore|auto] [--out DIR] [--data DIR] [--gat BIN]
+#       [--corpus use|ignore|auto] [--evaluate-only] [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
 # training family validates):
@@ -49,9 +49,15 @@
 # --pair-scorer). --world-columns use lets skinweights-any read the vertex's
 # world-frame position and normal (gat train --world-columns; the default,
 # ignore, gives it only quantities measured from the character's own bones).
-# --heat-blend S also evaluates the same checkpoint with its weights mixed
-# with bone heat's, (1 - S) * model + S * bone heat per vertex (gat eval
+# After training, gat calibrate chooses the best checkpoint's post-processing
+# (a heat blend and a min weight) on the fold's validation characters; the
+# method skinweights-any is the calibrated checkpoint, skinweights-any-raw the
+# model's own top-4 weights.
+# --heat-blend S also evaluates the uncalibrated checkpoint with its weights
+# mixed with bone heat's, (1 - S) * model + S * bone heat per vertex (gat eval
 # --heat-blend), as the method skinweights-any+heat in the tables.
+# --evaluate-only re-runs only the evaluation of folds already trained in
+# --out (bone heat, calibration, the three rows).
 # --augment KINDS adds --augment-copies (default 2) augmented variants of
 # every *training* character (gat dataset build --augment KINDS, seeded by
 # --seed; docs/experiments/augmentations.md): the variants of the validation
@@ -73,7 +79,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= world_columns= precision=fp32
-heat_blend= augment= augment_copies=2 corpus=auto
+heat_blend= augment= augment_copies=2 corpus=auto evaluate_only=0
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/tools/gat"
@@ -89,6 +95,7 @@ while [ $# -gt 0 ]; do
     --world-columns) world_columns="${2:?--world-columns needs ignore or use}"; shift 2 ;;
     --precision) precision="${2:?--precision needs fp32 or bf16}"; shift 2 ;;
     --heat-blend) heat_blend="${2:?--heat-blend needs a share in (0, 1]}"; shift 2 ;;
+    --evaluate-only) evaluate_only=1; shift ;;
     --corpus) corpus="${2:?--corpus needs use, ignore or auto}"; shift 2 ;;
     --augment) augment="${2:?--augment needs a list of kinds}"; shift 2 ;;
     --augment-copies) augment_copies="${2:?--augment-copies needs a count}"; shift 2 ;;
@@ -126,6 +133,38 @@ check_validation() {
     || { cat "$stem.log" >&2; die "validation eval of $d/$m.best.gcm failed"; }
   l1="$(python3 -c 'import json,sys; print("%.4f" % json.load(open(sys.argv[1]))["overall"]["l1_mean"])' "$stem.json")"
   log "$(basename "$d"): $m $(grep '^best validation' "$d/$m.train.log" | tail -n 1); gat eval on the validation characters: L1 $l1"
+}
+
+# calibrate_and_evaluate DIR FOLD: the best checkpoint's post-processing
+# (heat blend, min weight) chosen on the fold's validation characters by gat
+# calibrate (DIR/skinweights-any.calibrated.gcm), then the test characters
+# evaluated with it (method skinweights-any) and without it (the model's own
+# top-4 weights: skinweights-any-raw).
+calibrate_and_evaluate() {
+  local d="$1" f="$2"
+  "$gat" calibrate "$d/skinweights-any.best.gcm" -o "$d/skinweights-any.calibrated.gcm" -q >"$d/calibrate.log" 2>&1 \
+    || { cat "$d/calibrate.log" >&2; die "calibration on $f failed"; }
+  log "$f: $(grep '^chosen' "$d/calibrate.log")"
+  "$gat" eval --model "$d/skinweights-any.calibrated.gcm" --poses "$poses" --seed "$seed" --confusions 8 \
+    --json "$d/skinweights-any.json" >"$d/skinweights-any.log" 2>&1 || { cat "$d/skinweights-any.log" >&2; die "eval on $f failed"; }
+  "$gat" eval --model "$d/skinweights-any.best.gcm" --poses "$poses" --seed "$seed" --confusions 8 \
+    --json "$d/skinweights-any-raw.json" >"$d/skinweights-any-raw.log" 2>&1 \
+    || { cat "$d/skinweights-any-raw.log" >&2; die "eval without calibration on $f failed"; }
+}
+
+# evaluate_fold DIR FOLD: bone heat on the test characters, the trained model
+# calibrated and not, and (--heat-blend) its fixed mix with bone heat.
+evaluate_fold() {
+  local d="$1" f="$2"
+  "$gat" eval --baseline bone-heat --data "$d/dataset.json" --poses "$poses" --seed "$seed" --confusions 8 \
+    --json "$d/bone-heat.json" >"$d/bone-heat.log" 2>&1 || { cat "$d/bone-heat.log" >&2; die "bone heat on $f failed"; }
+  calibrate_and_evaluate "$d" "$f"
+  if [ -n "$heat_blend" ]; then
+    "$gat" eval --model "$d/skinweights-any.best.gcm" --heat-blend "$heat_blend" --min-weight 0 --poses "$poses" \
+      --seed "$seed" --json "$d/skinweights-any+heat.json" >"$d/skinweights-any+heat.log" 2>&1 \
+      || { cat "$d/skinweights-any+heat.log" >&2; die "eval with --heat-blend on $f failed"; }
+  fi
+  log "$f: evaluated"
 }
 
 # family_files FAMILY: the family's files. A corpus family is one source's
@@ -185,6 +224,13 @@ test_family() {
 
 for fold in $folds; do
   dir="$out/$fold"
+  if [ "$evaluate_only" = 1 ]; then
+    for x in dataset.json skinweights-any.best.gcm; do
+      [ -f "$dir/$x" ] || die "--evaluate-only: $dir/$x is missing (run the fold first)"
+    done
+    evaluate_fold "$dir" "$fold"
+    continue
+  fi
   mkdir -p "$dir"
   files=() val="" test=""
   for fam in $(train_families "$fold") $(test_family "$fold"); do
@@ -223,9 +269,6 @@ print(f"{path}: kept {len(keep)} of {len(chars)} characters (variants of trainin
 PY
   fi
   log "$fold: $(tail -n 1 "$dir/dataset.log")"
-  "$gat" eval --baseline bone-heat --data "$dir/dataset.json" --poses "$poses" --seed "$seed" \
-    --json "$dir/bone-heat.json" >"$dir/bone-heat.log" 2>&1 || { cat "$dir/bone-heat.log" >&2; die "bone heat on $fold failed"; }
-  log "$fold: bone heat done"
   "$gat" train --model skinweights-any --data "$dir/dataset.json" --seed "$seed" --epochs 100000 --minutes "$minutes" \
     --val-every 1 --batch 4 --sample-vertices 512 --sampling "$sampling" ${pair_scorer:+--pair-scorer "$pair_scorer"} \
     ${world_columns:+--world-columns "$world_columns"} \
@@ -234,15 +277,8 @@ PY
     || { cat "$dir/skinweights-any.train.log" >&2; die "training on $fold failed"; }
   log "$fold: $(tail -n 1 "$dir/skinweights-any.train.log")"
   check_validation "$dir" skinweights-any
-  "$gat" eval --model "$dir/skinweights-any.best.gcm" --poses "$poses" --seed "$seed" --json "$dir/skinweights-any.json" \
-    >"$dir/skinweights-any.log" 2>&1 || { cat "$dir/skinweights-any.log" >&2; die "eval on $fold failed"; }
   log "$fold: skinweights-any $(grep -c '^epoch' "$dir/skinweights-any.train.log") epochs"
-  if [ -n "$heat_blend" ]; then
-    "$gat" eval --model "$dir/skinweights-any.best.gcm" --heat-blend "$heat_blend" --poses "$poses" --seed "$seed" \
-      --json "$dir/skinweights-any+heat.json" >"$dir/skinweights-any+heat.log" 2>&1 \
-      || { cat "$dir/skinweights-any+heat.log" >&2; die "eval with --heat-blend on $fold failed"; }
-    log "$fold: skinweights-any mixed with bone heat at $heat_blend evaluated"
-  fi
+  evaluate_fold "$dir" "$fold"
   if [ "$fold" = humanoids ]; then  # the paper's model, on the skeleton it was trained on
     "$gat" train --model neuroskinning --data "$dir/dataset.json" --seed "$seed" --epochs 100000 --minutes "$minutes" \
       --val-every 1 --batch 4 --sample-vertices 512 --sampling random --precision "$precision" --out "$dir/neuroskinning.gcm" \
@@ -261,7 +297,7 @@ out, folds = sys.argv[1], sys.argv[2:]
 print("| fold | character | method | precision | recall | L1 mean | L1 max | dominant bone | deform. mean / h | deform. max / h |")
 print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
 for fold in folds:
-    for m in ("bone-heat", "skinweights-any", "skinweights-any+heat", "neuroskinning"):
+    for m in ("bone-heat", "skinweights-any", "skinweights-any-raw", "skinweights-any+heat", "neuroskinning"):
         p = os.path.join(out, fold, m + ".json")
         if not os.path.exists(p):
             continue
@@ -272,7 +308,7 @@ for fold in folds:
 # The bar per test character: the model's L1 below bone heat's, its
 # dominant bone at least 85 % (for skinweights-any, and with --heat-blend for
 # the mix too).
-for m in ("skinweights-any", "skinweights-any+heat"):
+for m in ("skinweights-any", "skinweights-any-raw", "skinweights-any+heat"):
     rows, below, high, total = [], 0, 0, 0
     for fold in folds:
         paths = [os.path.join(out, fold, x + ".json") for x in ("bone-heat", m)]

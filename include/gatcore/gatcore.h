@@ -158,12 +158,14 @@ gatcore_status gatcore_weight_predictor_predict(gatcore_weight_predictor* p, con
                                                 const gatcore_skeleton* skeleton, int32_t k, int32_t* out_joints,
                                                 float* out_weights);
 /* Later predictions mix the model's weights with bone heat's: (1 - share) *
- * model + share * bone heat per vertex, the largest k kept (0, the default:
- * the model alone; as gat predict-weights --heat-blend). share in [0, 1]. */
+ * model + share * bone heat per vertex, the largest k kept (as gat
+ * predict-weights --heat-blend; default: the share calibrated into the
+ * checkpoint by gat calibrate, else 0, the model alone). share in [0, 1]. */
 gatcore_status gatcore_weight_predictor_set_heat_blend(gatcore_weight_predictor* p, float share);
 /* Later predictions drop each vertex's influences below `share` of its total
- * and renormalise, after the heat blend (0, the default: none; as gat
- * predict-weights --min-weight). share in [0, 1). */
+ * and renormalise, after the heat blend (as gat predict-weights
+ * --min-weight; default: the value calibrated into the checkpoint, else 0,
+ * none). share in [0, 1). */
 gatcore_status gatcore_weight_predictor_set_min_weight(gatcore_weight_predictor* p, float share);
 
 #ifdef __cplusplus

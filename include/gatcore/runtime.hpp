@@ -184,14 +184,16 @@ class WeightPredictor {
                                  const WeightOptions& opt, WeightReport* report = nullptr);
   // Later predictions mix the model's weights with bone heat's:
   // (1 - share) * model + share * bone heat per vertex, the largest
-  // max_influences kept (0, the default: the model alone). A hedge for a
-  // character unlike every family the model was trained on
-  // (docs/RESULTS.md). Throws unless share is in [0, 1].
+  // max_influences kept. A hedge for a character unlike every family the
+  // model was trained on (docs/RESULTS.md). Default: the share calibrated
+  // into the checkpoint (gat calibrate), else 0 (the model alone). Throws
+  // unless share is in [0, 1].
   void set_heat_blend(float share);
   float heat_blend() const;
   // Later predictions drop influences below `share` of the vertex's total
-  // and renormalise, after the heat blend (0, the default: none; as gat
-  // predict-weights --min-weight). Throws unless share is in [0, 1).
+  // and renormalise, after the heat blend (as gat predict-weights
+  // --min-weight). Default: the value calibrated into the checkpoint (gat
+  // calibrate), else 0 (none). Throws unless share is in [0, 1).
   void set_min_weight(float share);
   float min_weight() const;
   // The bone names a name-matched model was trained on; empty for

@@ -7,6 +7,7 @@
 
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/inference/character_model.hpp"
+#include "gatcore/character/inference/model_description.hpp"
 #include "gatcore/character/inference/weight_prediction.hpp"
 #include "gatcore/character/rig/limit_weights.hpp"
 #include "gatcore/error.hpp"
@@ -72,6 +73,9 @@ WeightPredictor WeightPredictor::load(const std::string& path, Device device) {
     m->bones = character::character_model_bones(m->lm, path, models::Task::weights);
     m->presence = character::checkpoint_bone_presence(m->lm.file, path, m->bones.size());
   }
+  // The post-processing calibrated for the model (gat calibrate) is its default.
+  if (const auto pp = character::read_model_description(m->lm.file, path).postprocess)
+    m->heat_blend = pp->heat_blend, m->min_weight = pp->min_weight;
   m->lm.model->to(device);
   m->lm.model->fold_batch_norm();
   m->device = device;

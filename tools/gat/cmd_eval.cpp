@@ -37,6 +37,7 @@ struct EvalArgs {
   long samples = 16, seed = 12345, poses = 16, size = 320;
   double min_weight = 0;
   double heat_blend = 0;
+  bool min_weight_given = false, heat_blend_given = false;
   long confusions = 0;
   gat::EvalMotionArgs motion;
   gat::CommonOptions common;
@@ -66,11 +67,13 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
       ->check(one_of({"bone-heat"}));
   c.add_option("--min-weight", a->min_weight,
                "skin weights: drop predicted influences below W of the vertex's total (renormalised) before the "
-               "metrics (default 0; bone heat: 0.01)")
+               "metrics (default: a skinweights-any checkpoint's calibrated value (gat calibrate), else 0; bone "
+               "heat: 0.01)")
       ->check(number_in(0, 0.999999));
   c.add_option("--heat-blend", a->heat_blend,
                "skinweights-any: mix the model's weights with bone heat's, (1 - S) * model + S * bone heat per vertex, "
-               "top k kept (as gat predict-weights --heat-blend; default 0: the model alone)")
+               "top k kept (as gat predict-weights --heat-blend; default: the checkpoint's calibrated share (gat "
+               "calibrate), else 0, the model alone)")
       ->check(number_in(0, 1));
   c.add_option("--confusions", a->confusions,
                "skin weights: after the table, each character's N largest dominant-bone confusions (artist's joint -> "
@@ -137,6 +140,7 @@ gat::Runner gat::setup_eval(CLI::App& gat) {
     for (const char* o : {"--baseline", "--min-weight", "--heat-blend"})
       GATCORE_CHECK(!motion || !c.count(o), o, " does not apply with --motion");
     apply_threads(a->common);
+    a->min_weight_given = c.count("--min-weight") > 0, a->heat_blend_given = c.count("--heat-blend") > 0;
     if (motion) {
       EvalMotionArgs m = a->motion;
       m.models = a->models, m.data = a->data, m.part = a->part, m.json = a->json_path, m.errormaps = a->errormap_dir;
@@ -169,9 +173,15 @@ int run_eval(const EvalArgs& a) {
   LoadedModel l = load_checkpoint(path);
   if (gatcore::models::any_skeleton(l.model->config().kind())) {
     // Each character's own joints (no super skeleton): the baselines' protocol.
-    if (data.empty()) data = character::read_model_description(l.file, path).data_path;
-    return gat::eval_weight_baseline(gatcore::models::model_kind_name(gatcore::models::ModelKind::skinweights_any), data, part, poses, seed, a.min_weight > 0 ? a.min_weight : -1.0,
-                                      json_path, a.common.quiet, int(a.confusions), &l, float(a.heat_blend));
+    // The checkpoint's calibrated post-processing (gat calibrate) unless the flags say otherwise.
+    const character::ModelDescription d = character::read_model_description(l.file, path);
+    if (data.empty()) data = d.data_path;
+    const character::WeightPostprocess pp = d.postprocess.value_or(character::WeightPostprocess{});
+    const double min_weight = a.min_weight_given ? a.min_weight : double(pp.min_weight);
+    const float heat_blend = a.heat_blend_given ? float(a.heat_blend) : pp.heat_blend;
+    return gat::eval_weight_baseline(gatcore::models::model_kind_name(gatcore::models::ModelKind::skinweights_any),
+                                     data, part, poses, seed, min_weight > 0 ? min_weight : -1.0, json_path,
+                                     a.common.quiet, int(a.confusions), &l, heat_blend);
   }
   GATCORE_CHECK(a.heat_blend == 0, "--heat-blend: ", path, " is a ", l.model->config().name,
                 " checkpoint; gat eval mixes bone heat only into skinweights-any's weights (each character's own "

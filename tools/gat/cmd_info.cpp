@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_options.hpp"
 #include "cli_util.hpp"
 #include "commands.hpp"
 #include "gatcore/character/data/bone_candidate_samples.hpp"
@@ -208,6 +209,15 @@ void print_model(const std::string& path) {
   if (run.precision_requested != run.precision)
     std::printf(" (%s requested; this machine ran fp32)", gatcore::precision_name(run.precision_requested));
   std::printf("\n");
+  if (models::any_skeleton(c.kind()))
+    std::printf("weights    %s\n",
+                d.postprocess ? ("calibrated (gat calibrate): " +
+                                 (d.postprocess->heat_blend > 0
+                                      ? "mixed with bone heat at " + number_text(double(d.postprocess->heat_blend)) + ", "
+                                      : std::string()) +
+                                 "influences below " + number_text(double(d.postprocess->min_weight)) + " dropped")
+                                    .c_str()
+                              : "the model's own top k (not calibrated: gat calibrate)");
   std::printf("data       %s", d.data.empty() ? "-" : d.data.c_str());
   if (!d.data_path.empty()) std::printf(" %s", d.data_path.c_str());
   std::printf("\n");

@@ -28,7 +28,7 @@ struct PredictArgs {
   std::string out, method = "model";
   long k = 4;
   double min_weight = -1;  // < 0: the method's default
-  double heat_blend = 0;   // a model's weights mixed with bone heat's at this share
+  double heat_blend = -1;  // a model's weights mixed with bone heat's at this share; < 0: the model's default
   std::vector<std::string> aliases;
   std::vector<std::string> bones, controls;  // bone heat: joints forced to be bones / controls
   CommonOptions common;
@@ -106,7 +106,7 @@ int run(const PredictArgs& a) {
   if (heat) {
     GATCORE_CHECK(opt.bind.aliases.pairs.empty(),
                   "--alias has no effect with --method bone-heat (no model bones to match)");
-    GATCORE_CHECK(a.heat_blend == 0, "--heat-blend mixes a model's weights with bone heat's; with --method "
+    GATCORE_CHECK(a.heat_blend < 0, "--heat-blend mixes a model's weights with bone heat's; with --method "
                                      "bone-heat there is no model");
     stage("reading the character");
     const Character ch = load_gltf(in);
@@ -128,9 +128,6 @@ int run(const PredictArgs& a) {
     print_weightless_joints(ch, w, "controls outside the mesh, or no vertex's nearest bone");
     return 0;
   }
-  GATCORE_CHECK(a.heat_blend > 0 || (a.bones.empty() && a.controls.empty()),
-                "--bone and --control only apply to bone heat (--method bone-heat, or a model's --heat-blend); a model "
-                "scores every joint itself");
   const Device dev = device_from_flag(a.common.device, "predict-weights");
   Activity reading("reading the checkpoint " + model_path);
   stage("reading the checkpoint");
@@ -139,11 +136,14 @@ int run(const PredictArgs& a) {
   const bool any = predictor.any_skeleton();
   GATCORE_CHECK(!any || opt.bind.aliases.pairs.empty(),
                 "--alias has no effect with skinweights-any (it matches no bone names)");
-  predictor.set_heat_blend(float(a.heat_blend));
-  if (a.min_weight > 0) predictor.set_min_weight(float(a.min_weight));
+  if (a.heat_blend >= 0) predictor.set_heat_blend(float(a.heat_blend));
+  if (a.min_weight >= 0) predictor.set_min_weight(float(a.min_weight));
+  GATCORE_CHECK(predictor.heat_blend() > 0 || (a.bones.empty() && a.controls.empty()),
+                "--bone and --control only apply to bone heat (--method bone-heat, or a model's heat blend); a model "
+                "scores every joint itself");
   stage("reading the character");
   const Character ch = load_gltf(in);
-  if (a.heat_blend > 0) opt.heat = heat_params(a, ch, in);
+  if (predictor.heat_blend() > 0) opt.heat = heat_params(a, ch, in);
   Activity doing("predicting the skin weights of " + in);
   stage("features and inference");
   const SkinWeights w = predictor.predict(ch.mesh, ch.skeleton, opt, &report);
@@ -171,9 +171,12 @@ int run(const PredictArgs& a) {
     }
     std::printf("\n");
   }
-  if (a.heat_blend > 0)
-    std::printf("  mixed with bone heat: (1 - %g) * model + %g * bone heat per vertex, top %ld kept\n", a.heat_blend,
-                a.heat_blend, k);
+  if (predictor.heat_blend() > 0)
+    std::printf("  mixed with bone heat: (1 - %g) * model + %g * bone heat per vertex, top %ld kept\n",
+                double(predictor.heat_blend()), double(predictor.heat_blend()), k);
+  if (predictor.min_weight() > 0)
+    std::printf("  influences below %g of the vertex's total dropped, the rest renormalised\n",
+                double(predictor.min_weight()));
   print_influences(w, k);
   std::printf("\n  features %.1f ms, inference %.1f ms -> %s\n", report.features_ms, report.inference_ms, out.c_str());
   if (any)
@@ -202,12 +205,13 @@ Runner setup_predict_weights(CLI::App& gat) {
                "(Blender's automatic weights), on any skeleton, no model")
       ->check(one_of({"model", "bone-heat"}));
   c.add_option("--min-weight", a->min_weight,
-               "drop influences below W of the vertex's total, renormalise (default 0 for a model, 0.01 for bone "
-               "heat; artists often use about 2 influences)")
+               "drop influences below W of the vertex's total, renormalise (default: a model's calibrated value "
+               "(gat calibrate), else 0; bone heat 0.01; artists often use about 2 influences)")
       ->check(number_in(0, 0.999));
   c.add_option("--heat-blend", a->heat_blend,
                "S in [0, 1]: mix the model's weights with bone heat's, (1 - S) * model + S * bone heat per vertex, "
-               "then keep the largest --max-influences (default 0: the model alone). A hedge for a character unlike "
+               "then keep the largest --max-influences (default: the model's calibrated share (gat calibrate), else "
+               "0, the model alone). A hedge for a character unlike "
                "every family the model was trained on: 0.3 lowered L1 on the unseen creatures and Khronos rigs "
                "and cost on characters like the training ones (docs/RESULTS.md)")
       ->check(number_in(0, 1));

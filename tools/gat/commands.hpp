@@ -18,5 +18,6 @@ Runner setup_predict_weights(CLI::App& gat);
 Runner setup_deform(CLI::App& gat);
 Runner setup_distill(CLI::App& gat);
 Runner setup_upgrade_checkpoint(CLI::App& gat);
+Runner setup_calibrate(CLI::App& gat);
 
 }  // namespace gat

@@ -32,6 +32,7 @@ constexpr gat::Command kCommands[] = {
     {"predict-weights", gat::setup_predict_weights},
     {"deform", gat::setup_deform},
     {"distill", gat::setup_distill},
+    {"calibrate", gat::setup_calibrate},
     {"upgrade-checkpoint", gat::setup_upgrade_checkpoint},
 };
 

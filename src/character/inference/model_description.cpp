@@ -1,5 +1,7 @@
 #include "gatcore/character/inference/model_description.hpp"
 
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 #include "gatcore/character/deform/detail_distortion.hpp"
@@ -92,6 +94,22 @@ std::string joined_bone_names(const std::vector<std::string>& names) {
   return s;
 }
 
+namespace {
+
+// The shortest text that reads back as the same float ("0.05", not
+// "0.05000000074505806").
+std::string float_text(float v) {
+  char buf[32];
+  for (int digits = 6; digits < 9; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, double(v));
+    if (std::strtof(buf, nullptr) == v) return buf;
+  }
+  std::snprintf(buf, sizeof buf, "%.9g", double(v));
+  return buf;
+}
+
+}  // namespace
+
 std::map<std::string, std::string> model_description_metadata(const ModelDescription& d) {
   std::map<std::string, std::string> md;
   md["features"] = feature_kind_name(d.features);
@@ -113,6 +131,10 @@ std::map<std::string, std::string> model_description_metadata(const ModelDescrip
     md["joint_columns"] = format_joint_columns(d.nearest_joints);
   }
   if (!d.feature_layout.empty()) md["feature_layout"] = d.feature_layout;
+  if (d.postprocess) {
+    md["min_weight"] = float_text(d.postprocess->min_weight);
+    md["heat_blend"] = float_text(d.postprocess->heat_blend);
+  }
   return md;
 }
 
@@ -137,6 +159,15 @@ ModelDescription read_model_description(const models::CheckpointFile& f, const s
   d.data_path = value("data_path");
   d.data_hash = value("data_hash");
   d.data = value("data");
+  const bool has_min = md.count("min_weight") > 0, has_blend = md.count("heat_blend") > 0;
+  GATCORE_CHECK(has_min == has_blend, path, ": metadata has '", has_min ? "min_weight" : "heat_blend",
+                "' without '", has_min ? "heat_blend" : "min_weight", "' (a calibrated post-processing records both)");
+  if (has_min) {
+    WeightPostprocess w;
+    w.min_weight = float(models::metadata_number(md, "min_weight", 0.0, 0.999999, path));
+    w.heat_blend = float(models::metadata_number(md, "heat_blend", 0.0, 1.0, path));
+    d.postprocess = w;
+  }
   return d;
 }
 

@@ -7,7 +7,7 @@
 // source are the one place that knows the metadata keys ("features",
 // "skeleton", "joint_columns", "distortion_scales", "bone_presence",
 // "training_characters", "world_columns", "feature_layout", "data",
-// "data_path", "data_hash"). The checkpoint itself (models/checkpoint.hpp)
+// "data_path", "data_hash", "min_weight", "heat_blend"). The checkpoint itself (models/checkpoint.hpp)
 // stays a safetensors file with a string metadata map.
 #include <cstddef>
 #include <map>
@@ -52,6 +52,18 @@ std::string format_bone_presence(const std::vector<int>& count);
 // Bone names joined by commas, as "skeleton" records them.
 std::string joined_bone_names(const std::vector<std::string>& names);
 
+// How a skin-weight model's top-k weights are post-processed before use:
+// mixed with bone heat's at `heat_blend` ((1 - s) * model + s * bone heat,
+// top k kept), then influences below `min_weight` of the vertex's total
+// dropped and the rest renormalised. A softmax leaves small weights on every
+// candidate where artists use about two influences per vertex; the values are
+// chosen on held-out characters of the training families
+// (eval/weight_calibration.hpp), never on the test characters.
+struct WeightPostprocess {
+  float min_weight = 0.0f;
+  float heat_blend = 0.0f;
+};
+
 // All of the above in one struct.
 struct ModelDescription {
   FeatureKind features = FeatureKind::tube;
@@ -76,6 +88,9 @@ struct ModelDescription {
   // "dataset" or "embedded tube character", written from data_path); empty
   // when the file has no such entry.
   std::string data;
+  // Skin-weight models: the post-processing calibrated for it ("min_weight",
+  // "heat_blend"); absent: none (the model's top-k weights as they are).
+  std::optional<WeightPostprocess> postprocess;
 };
 
 // The metadata entries of `d` (the keys above; the conditional ones only where they apply).
