@@ -15,7 +15,8 @@
 #   men        train the modular women + animals + creatures, test the modular men
 #   creatures  train the modular men + women + animals, test the creatures
 #   khronos    train every Quaternius character, test the Khronos sample rigs
-#   animated_humans  (corpus) train every shared Quaternius family, test the corpus's
+#   animated_humans  (corpus) train every shared Quaternius family (and, with
+#              --corpus use, the other corpus families), test the corpus's
 #              humanoids on rigs unlike the shared ones: the 12 Animated Men/Women
 #              outfits (one 31-joint rig), Cowboy, Alien and three.js RobotExpressive
 # With --corpus use (auto: when data/characters/corpus exists) every fold also
@@ -216,7 +217,7 @@ test_family() {
     women) echo modular_women ;;
     men) echo modular_men ;;
     humanoids) echo "" ;;
-    animated_humans) [ "$corpus" = use ] || die "the animated_humans fold tests corpus characters: it needs --corpus use"
+    animated_humans) [ -d "$c" ] || die "the animated_humans fold tests corpus characters: $c is missing"
       echo animated_humans ;;
     *) echo "$1" ;;
   esac
