@@ -37,15 +37,12 @@ if [[ "$mode" != "--fuzz-only" ]]; then
   # sizes, which under ASan + libFuzzer coverage take 10-30 times as long and
   # would push CI past its time. Every loader, writer and kernel still runs
   # here through the unit tests, the CLI bad-input tests and the fuzz replays.
-  # The list is tests/sanitizer/release_only.regex; scripts/check_ctest_fixtures.py
-  # first checks that no kept test loses the set-up it needs.
-  # (Set-ups such as gat_train_character_models and gat_train_data_densegats,
-  # which other tests need, must stay: ctest does
-  # not add an excluded set-up back, and the tests that need it would fail;
-  # so gat_heat_blend, gat_world_columns and gat_calibrate, which need
-  # gat_skinweights_any's trained model, go with it: blend_weights, the
-  # runtime's mix, the world columns' normaliser and the calibration grid run
-  # here in the unit tests.)
+  # The list is tests/sanitizer/release_only.regex. ctest does not add an
+  # excluded set-up back, so a test that needs one (gat_heat_blend,
+  # gat_world_columns and gat_calibrate need gat_skinweights_any's model) goes
+  # with it, and scripts/check_ctest_fixtures.py refuses a list that forgets
+  # one. blend_weights, the runtime's mix, the world columns' normaliser and
+  # the calibration grid still run here in the unit tests.
   exclude="$root/tests/sanitizer/release_only.regex"
   python3 scripts/check_ctest_fixtures.py "$build" "$exclude"
   ctest --test-dir "$build" --output-on-failure -j2 -E "$(cat "$exclude")"
