@@ -115,6 +115,100 @@ TEST_CASE("resuming from a checkpoint gives the same next epoch as uninterrupted
   std::remove(path.c_str());
 }
 
+TEST_CASE("weight averaging: the average follows its rule, validation and checkpoints use it, a resume continues it") {
+  ModelConfig cfg = small_config("densegats");
+  auto data = data_for(cfg);
+  Normaliser norm = Normaliser::fit(data, true);
+  TrainOptions o = TrainOptions::defaults_for(cfg);
+  o.sample_vertices = 20;
+  o.batch_size = 1;  // three steps an epoch
+  o.seed = 3;
+  o.average_decay = 0.75f;
+  auto m = make_model(cfg, 5);
+  Trainer t(*m, o, norm);
+  REQUIRE(t.averaging());
+  const auto& params = m->registry().params;
+  // The rule, in double beside the trainer: after step s (counted from 1)
+  // avg = d avg + (1 - d) param, d = min(decay, (1 + s) / (10 + s)).
+  std::vector<std::vector<double>> expect;
+  for (const auto& p : params) {
+    const auto v = p.var.value().to_vector();
+    expect.emplace_back(v.begin(), v.end());
+  }
+  const auto follow = [&](int, std::int64_t, std::int64_t, double) {
+    const double s = double(t.optimiser().steps());
+    const double d = std::min(0.75, (1 + s) / (10 + s));
+    for (std::size_t k = 0; k < params.size(); ++k) {
+      const auto v = params[k].var.value().to_vector();
+      for (std::size_t i = 0; i < v.size(); ++i) expect[k][i] = d * expect[k][i] + (1 - d) * double(v[i]);
+    }
+  };
+  for (int e = 0; e < 4; ++e) t.run_epoch(data, {}, follow);
+  CHECK(t.optimiser().steps() == 12);
+  double gap = 0;  // the average is not the last step's weights
+  for (std::size_t k = 0; k < params.size(); ++k) {
+    const auto a = t.averaged()[k].to_vector(), v = params[k].var.value().to_vector();
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      CHECK(a[i] == Approx(expect[k][i]).margin(1e-6));
+      gap = std::max(gap, std::abs(double(a[i]) - double(v[i])));
+    }
+  }
+  CHECK(gap > 1e-4);
+
+  // Validation runs on the average and leaves the last step's weights in place.
+  const auto raw_before = params[0].var.value().to_vector();
+  const EpochStats st = t.run_epoch(data, {data[2]});
+  const auto raw = params[0].var.value().to_vector();
+  CHECK(raw != raw_before);
+  double on_raw = t.validate({data[2]}).loss;
+  {
+    AveragedWeightsScope averaged(t);
+    CHECK(params[0].var.value().to_vector() != raw);
+    CHECK(t.validate({data[2]}).loss == st.val_loss);
+  }
+  CHECK(params[0].var.value().to_vector() == raw);
+  CHECK(on_raw != st.val_loss);
+
+  // The checkpoint's model is the average; the last step's weights ride along.
+  const std::string path = tmp_path("average");
+  save_checkpoint(path, *m, norm, &t);
+  CHECK(params[0].var.value().to_vector() == raw);
+  const EpochStats uninterrupted = t.run_epoch(data, {data[2]});
+  LoadedModel l = load_checkpoint(path);
+  CHECK(l.file.metadata.at("average_decay") == "0.75");
+  CHECK(read_training_progress(l.file, path).average_decay == 0.75);
+  REQUIRE(l.file.find("optim.raw." + params[0].name));
+  CHECK(l.file.find("optim.raw." + params[0].name)->to_vector() == raw);
+  CHECK(l.model->registry().find_param(params[0].name)->value().to_vector() != raw);
+
+  // Resuming continues the same run: same losses, same average, same weights.
+  Trainer t2(*l.model, o, l.norm);
+  restore_training_state(l.file, t2, path);
+  const EpochStats resumed = t2.run_epoch(data, {data[2]});
+  CHECK(resumed.train_loss == uninterrupted.train_loss);
+  CHECK(resumed.val_loss == uninterrupted.val_loss);
+  for (std::size_t k = 0; k < params.size(); ++k) {
+    CHECK(l.model->registry().params[k].var.value().to_vector() == params[k].var.value().to_vector());
+    CHECK(t2.averaged()[k].to_vector() == t.averaged()[k].to_vector());
+  }
+
+  // A file with the last step's weights of only some parameters is refused.
+  CheckpointFile partial = l.file;
+  std::erase_if(partial.tensors, [&](const auto& nt) { return nt.first == "optim.raw." + params[0].name; });
+  const std::string bad = tmp_path("average_partial");
+  write_checkpoint_file(bad, partial);
+  LoadedModel lp = load_checkpoint(bad);
+  Trainer t3(*lp.model, o, lp.norm);
+  CHECK_THROWS_WITH(restore_training_state(lp.file, t3, bad),
+                    Catch::Contains(bad) && Catch::Contains("optim.raw") && Catch::Contains("cannot resume"));
+  // A decay of 1 would never move.
+  TrainOptions one = o;
+  one.average_decay = 1.f;
+  CHECK_THROWS_WITH(Trainer(*m, one, norm), Catch::Contains("weight-average decay 1"));
+  std::remove(path.c_str());
+  std::remove(bad.c_str());
+}
+
 TEST_CASE("a checkpoint says how far its trainer got") {
   ModelConfig cfg = small_config("densegats");
   auto data = data_for(cfg);

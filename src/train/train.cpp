@@ -106,6 +106,42 @@ Trainer::Trainer(Model& model, TrainOptions opt, Normaliser norm, dist::Communic
   plateau_.factor = opt.plateau_factor;
   plateau_.patience = opt.plateau_patience;
   plateau_.min_lr = opt.min_lr;
+  GATCORE_CHECK(opt.average_decay >= 0.f && opt.average_decay < 1.f, "Trainer: the weight-average decay ",
+                opt.average_decay, " is outside [0, 1)");
+  if (opt.average_decay > 0.f)
+    for (const auto& p : model.registry().params) {
+      const Tensor& v = p.var.value();
+      Backend& be = backend(v.device());
+      average_.push_back(be.empty(v.rows(), v.cols()));
+      be.copy(v, average_.back());
+    }
+}
+
+void Trainer::update_average() {
+  // The warm-up of TensorFlow's ExponentialMovingAverage(num_updates): early
+  // on the average follows the parameters closely.
+  const double t = double(adam_.steps());
+  const float d = std::min(opt_.average_decay, float((1.0 + t) / (10.0 + t)));
+  const auto& params = model_.registry().params;
+  for (std::size_t k = 0; k < params.size(); ++k) {
+    const Tensor& v = params[k].var.value();
+    backend(v.device()).axpby(d, average_[k], 1.f - d, v, average_[k]);
+  }
+}
+
+void Trainer::swap_averaged() {
+  if (average_.empty()) return;
+  const auto& params = model_.registry().params;
+  for (std::size_t k = 0; k < params.size(); ++k) {
+    const Tensor& v = params[k].var.value();
+    Backend& be = backend(v.device());
+    Tensor keep = be.empty(v.rows(), v.cols());
+    be.copy(v, keep);
+    be.copy(average_[k], v);
+    be.copy(keep, average_[k]);
+    v.bump_version();
+  }
+  swapped_ = !swapped_;
 }
 
 namespace {
@@ -136,6 +172,7 @@ std::vector<bool> Trainer::samples_needed(std::size_t count) const {
 EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vector<Sample>& val,
                               const BatchCallback& on_batch) {
   GATCORE_CHECK(!train.empty(), "Trainer: no training samples");
+  GATCORE_CHECK(!swapped_, "Trainer: an epoch started while the model holds the averaged weights");
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t bytes0 = comm_.bytes_sent();
   const double comm0 = comm_.seconds_in_collectives();
@@ -153,6 +190,7 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
     for (const auto& b : model_.registry().buffers) state.push_back(b.tensor);
     for (const Tensor& t : adam_.first_moments()) state.push_back(t);
     for (const Tensor& t : adam_.second_moments()) state.push_back(t);
+    for (const Tensor& t : average_) state.push_back(t);
     dist::broadcast_tensors(comm_, state);
     for (const auto& p : model_.registry().params) p.var.value().bump_version();
   }
@@ -169,6 +207,7 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
     GATCORE_CHECK(std::isfinite(l), "training diverged at epoch ", epoch_, ", batch ", b + 1, " (loss ", l,
                   "); try a smaller learning rate");
     adam_.step();
+    if (!average_.empty()) update_average();
     sum += l;
     st.samples += std::int64_t(smp.size());
     if (on_batch) on_batch(epoch_, b + 1, nb, l);
@@ -176,6 +215,7 @@ EpochStats Trainer::run_epoch(const std::vector<Sample>& train, const std::vecto
   st.batches = nb;
   st.train_loss = sum / double(nb);
   if (!val.empty()) {
+    AveragedWeightsScope averaged(*this);  // the weights a checkpoint of this epoch holds
     const Evaluation e = validate(val);
     st.val_loss = e.loss;
     st.val_l1 = e.weight_l1;

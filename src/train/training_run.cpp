@@ -55,6 +55,8 @@ RunSettings resumed_settings(const models::CheckpointFile& f, const std::string&
     models::schedule_from_name(md.at("lr_schedule"), (path + ": metadata lr_schedule").c_str());
     asked.lr_schedule = md.at("lr_schedule");
   }
+  if (asked.average_decay < 0 && md.count("average_decay"))
+    asked.average_decay = models::metadata_number(md, "average_decay", 0.0, 0.999999, path);
   return asked;
 }
 

@@ -1,5 +1,8 @@
 // The training state a checkpoint carries (the train layer's part of
-// checkpoint.hpp's format): Adam moments, epoch, lr, RNG, the plateau scheduler.
+// checkpoint.hpp's format): Adam moments, epoch, lr, RNG, the plateau scheduler and the
+// running average of the weights.
+#include <algorithm>
+#include <charconv>
 #include <limits>
 #include <sstream>
 
@@ -19,6 +22,22 @@ namespace {
 void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm, const Trainer* trainer,
                      const std::map<std::string, std::string>& extra) {
   CheckpointFile f = model_checkpoint(model, norm, extra, path);
+  if (trainer && trainer->averaging()) {
+    // The model's tensors become the average; the last step's weights move to
+    // "optim.raw.*" (no swap: a CPU model's tensors in `f` share its storage).
+    const auto& params = model.registry().params;
+    for (std::size_t k = 0; k < params.size(); ++k) {
+      auto it = std::find_if(f.tensors.begin(), f.tensors.end(),
+                             [&](const auto& nt) { return nt.first == params[k].name; });
+      Tensor raw = it->second;
+      it->second = to(trainer->averaged()[k], Device::cpu);
+      f.tensors.emplace_back("optim.raw." + params[k].name, raw);
+    }
+    // The float's shortest text, so that the file says 0.98, not 0.98000001907.
+    char text[32];
+    const auto end = std::to_chars(text, text + sizeof text, trainer->options().average_decay).ptr;
+    f.metadata["average_decay"] = std::string(text, end);
+  }
   if (trainer) {
     auto& t = const_cast<Trainer&>(*trainer);
     const auto& params = model.registry().params;
@@ -56,6 +75,24 @@ void restore_training_state(const CheckpointFile& f, Trainer& t, const std::stri
       else backend(dst.device()).copy(to(*src, dst.device()), dst);  // uploaded explicitly
     }
   }
+  // A run that averaged: the file's model is the average, and training goes on
+  // from the last step's weights.
+  std::size_t raw = 0;
+  for (std::size_t k = 0; k < params.size(); ++k) raw += f.find("optim.raw." + params[k].name) != nullptr;
+  if (raw != 0 && raw != params.size())
+    fail(path, "holds the last step's weights ('optim.raw.*') of " + std::to_string(raw) + " of " +
+                   std::to_string(params.size()) + " parameters: cannot resume");
+  for (std::size_t k = 0; k < params.size(); ++k) {
+    const Tensor& v = params[k].var.value();
+    if (t.averaging()) backend(v.device()).copy(v, t.averaged()[k]);
+    if (raw == 0) continue;
+    const std::string name = "optim.raw." + params[k].name;
+    const Tensor* src = f.find(name);
+    if (!src->same_shape(v)) fail(path, "shape mismatch for '" + name + "'");
+    if (v.device() == Device::cpu) v.copy_from_(*src);
+    else backend(v.device()).copy(to(*src, v.device()), v);
+    v.bump_version();
+  }
   for (const char* k : {"epoch", "lr", "adam_steps", "plateau_best", "plateau_has_best", "plateau_bad_epochs"}) meta(k);
   const auto& m = f.metadata;
   t.set_epoch(int(metadata_integer(m, "epoch", 0, std::numeric_limits<int>::max(), path)));
@@ -77,6 +114,7 @@ TrainingProgress read_training_progress(const CheckpointFile& f, const std::stri
   if (m.count("epoch")) p.epoch = int(metadata_integer(m, "epoch", 0, std::numeric_limits<int>::max(), path));
   if (m.count("lr")) p.lr = metadata_number(m, "lr", 0.0, 1e6, path);
   if (m.count("adam_steps")) p.adam_steps = metadata_integer(m, "adam_steps", 0, std::int64_t(1) << 52, path);
+  if (m.count("average_decay")) p.average_decay = metadata_number(m, "average_decay", 0.0, 0.999999, path);
   for (const auto& [name, t] : f.tensors)
     if (name.rfind("optim.", 0) == 0 && t.numel() > 0) p.resumable = true;
   return p;

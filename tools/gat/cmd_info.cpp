@@ -204,6 +204,9 @@ void print_model(const std::string& path) {
               progress.lr < 0 ? "-" : models::metadata_text(progress.lr).c_str(),
               static_cast<long long>(progress.adam_steps),
               progress.resumable ? " (resumable: optimiser state saved)" : "");
+  if (progress.average_decay > 0)
+    std::printf("averaged   the weights are their moving average over training (decay %g per step)\n",
+                progress.average_decay);
   // Checkpoints from before gat train --precision trained in fp32.
   std::printf("precision  %s training products", gatcore::precision_name(run.precision));
   if (run.precision_requested != run.precision)

@@ -58,6 +58,7 @@ struct TrainArgs {
   long epochs = 10, seed = 0, batch = 0, samples = 64;
   float lr = 1e-3f;
   double minutes = 0;  // 0: no time budget
+  double average_decay = -1;  // < 0: not given
   long val_every = 1, sample_vertices = 0;
   std::vector<std::int64_t> pair_scorer;
   std::string world_columns;  // skinweights-any: use | ignore; empty: the default (or a resumed checkpoint's)
@@ -132,6 +133,11 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "over this run's --minutes, else over its epochs: a time-budgeted run ends annealed); default of "
                "a resumed run: the checkpoint's")
       ->check(CLI::IsMember({"plateau", "step", "cosine"}));
+  c.add_option("--average-decay", a->average_decay,
+               "keep an exponential moving average of the weights, decay D per step (e.g. 0.98): validation, "
+               "--keep-best and the written models use the averaged weights, which swing less from epoch to epoch; "
+               "0: off (the default); default of a resumed run: the checkpoint's")
+      ->check(CLI::Range(0.0, 0.999999));
   c.add_option("--minutes", a->minutes,
                "time budget: no new epoch starts once M minutes of training have passed (the epoch running then "
                "finishes; --epochs still caps it)")
@@ -251,9 +257,11 @@ int run_train(TrainArgs a) {
     // The run's data and batching come from the checkpoint, so the resumed
     // run continues exactly where the interrupted one stopped.
     const train::RunSettings s = train::resumed_settings(
-        loaded.file, resume, {seed, samples, batch, sample_vertices, a.sampling, a.precision, a.lr_schedule});
+        loaded.file, resume, {seed, samples, batch, sample_vertices, a.sampling, a.precision, a.lr_schedule,
+                                  a.average_decay});
     seed = s.seed, samples = s.samples, batch = s.batch, sample_vertices = s.sample_vertices;
     a.sampling = s.sampling, a.precision = s.precision, a.lr_schedule = s.lr_schedule;
+    a.average_decay = s.average_decay;
     const std::string trained_on = character::read_model_description(loaded.file, resume).data_path;
     if (const std::string why = train::check_resumed_data(resume, trained_on, data); !why.empty()) return refuse(why);
     if (data.empty()) data = trained_on;
@@ -352,6 +360,7 @@ int run_train(TrainArgs a) {
     opt.sampling = sampling_from_name(a.sampling);
   if (!a.precision.empty()) opt.precision = parse_precision(a.precision, "--precision");
   if (!a.lr_schedule.empty()) opt.schedule = schedule_from_name(a.lr_schedule);
+  if (a.average_decay > 0) opt.average_decay = float(a.average_decay);
   // Parameters are drawn (or loaded) on the CPU and moved before the
   // optimiser allocates its moments next to them.
   model->to(dev);
@@ -392,9 +401,10 @@ int run_train(TrainArgs a) {
                 trainer.options().precision == Precision::bf16 ? ", bf16 products" : "");
   // The checkpoint's metadata: the run (training_run.hpp) and what a character command
   // (predict-weights, deform) needs to apply the model (model_description.hpp).
-  train::RunRecord run{seed,         samples,       opt.batch_size,
-                       opt.sample_vertices, opt.sampling, opt.schedule,
-                       trainer.options().precision, opt.precision};
+  train::RunRecord run;
+  run.seed = seed, run.samples = samples, run.batch = opt.batch_size, run.sample_vertices = opt.sample_vertices;
+  run.sampling = opt.sampling, run.schedule = opt.schedule;
+  run.precision = trainer.options().precision, run.precision_requested = opt.precision;
   if (td) train::record_init(run, init, init.empty() ? nullptr : &loaded.file, resume.empty() ? nullptr : &loaded.file);
   character::ModelDescription description;
   if (td) {

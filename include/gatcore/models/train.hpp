@@ -68,6 +68,12 @@ struct TrainOptions {
   // fp32 where the model's backend has no bf16 products (see
   // training_precision); options().precision is what runs.
   Precision precision = Precision::fp32;
+  // An exponential moving average of the parameters (Polyak averaging):
+  // after every step avg = d * avg + (1 - d) * param, with d = min(decay,
+  // (1 + t) / (10 + t)) at step t so that the first steps are not frozen in.
+  // Validation and checkpoints then use the averaged weights, which vary less
+  // from epoch to epoch than the last step's. 0: off.
+  float average_decay = 0.f;
 
   // The paper settings for a model: DenseGATs family and Ori.GAT: batch 8,
   // 1000 consecutive vertices, ReduceLROnPlateau; NeuroSkinning family: batch
@@ -194,6 +200,15 @@ class Trainer {
   // Restores the resumable state (checkpoints).
   void set_epoch(int e) { epoch_ = e; }
 
+  // options().average_decay > 0: the running average of the parameters
+  // (one tensor per model parameter, on the model's device).
+  bool averaging() const { return !average_.empty(); }
+  std::vector<Tensor>& averaged() { return average_; }
+  const std::vector<Tensor>& averaged() const { return average_; }
+  // Exchanges the model's parameters with their running average (a no-op
+  // without averaging): validation and checkpoints run between two calls.
+  void swap_averaged();
+
  private:
   // One optimiser step on the global batch `smp` / `sel`; returns its loss.
   double step(const std::vector<const Sample*>& smp, const std::vector<std::vector<std::int32_t>>& sel,
@@ -206,17 +221,39 @@ class Trainer {
   nn::Rng rng_;
   PlateauScheduler plateau_;
   int epoch_ = 0;
+  std::vector<Tensor> average_;  // empty: no averaging
+  bool swapped_ = false;         // the model holds the average now
+  void update_average();
+};
+
+// The model holds its trainer's averaged weights for the scope's life (both
+// no-ops without averaging).
+class AveragedWeightsScope {
+ public:
+  explicit AveragedWeightsScope(Trainer& t) : t_(t) { t_.swap_averaged(); }
+  ~AveragedWeightsScope() { t_.swap_averaged(); }
+  AveragedWeightsScope(const AveragedWeightsScope&) = delete;
+  AveragedWeightsScope& operator=(const AveragedWeightsScope&) = delete;
+
+ private:
+  Trainer& t_;
 };
 
 // save_checkpoint (checkpoint.hpp) with, when `trainer` is given, the state
 // to resume training: Adam moments ("optim.m.<param>", "optim.v.<param>"),
-// epoch, lr, adam_steps, rng and the plateau scheduler's state. The model may
+// epoch, lr, adam_steps, rng and the plateau scheduler's state. A trainer
+// that averages writes the averaged weights as the model (what a user runs)
+// and the last step's weights as "optim.raw.<param>" (what training goes on
+// from). The model may
 // live on any device (tensors are downloaded before writing).
 void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm, const Trainer* trainer,
                      const std::map<std::string, std::string>& extra = {});
 
 // Restores optimiser moments, epoch, lr, RNG and scheduler state saved with
 // the trainer (the trainer must wrap the model loaded from the same file).
+// Where the file holds "optim.raw.<param>", the model goes on from those and
+// an averaging trainer's average from the file's model weights; an averaging
+// trainer resuming a file without them starts its average there.
 void restore_training_state(const CheckpointFile& f, Trainer& trainer, const std::string& path = "checkpoint");
 
 // How far the trainer that saved a checkpoint got, for people reading the
@@ -229,6 +266,7 @@ struct TrainingProgress {
   double lr = -1;  // < 0: not recorded
   std::int64_t adam_steps = 0;
   bool resumable = false;  // the Adam moments are saved
+  double average_decay = 0;  // > 0: the model is a moving average of the weights, with this decay
 };
 TrainingProgress read_training_progress(const CheckpointFile& f, const std::string& path = "checkpoint");
 

@@ -36,6 +36,7 @@ struct RunRequest {
 struct RunSettings {
   long seed = 0, samples = 64, batch = 0, sample_vertices = 0;  // 0: the model's default
   std::string sampling, precision, lr_schedule;                 // "": the model's default
+  double average_decay = -1;                                    // < 0: the model's default (no averaging)
 };
 
 // Before any checkpoint is read: a fine-tune needs a dataset and takes the
@@ -43,8 +44,8 @@ struct RunSettings {
 std::string check_request(const RunRequest& r);
 
 // The settings a resumed run continues with: the checkpoint's seed, samples,
-// batch, sample vertices and sampling (where recorded), its precision and
-// schedule unless `asked` names one. Throws InvalidArgument naming `path`
+// batch, sample vertices and sampling (where recorded), its precision,
+// schedule and weight-average decay unless `asked` names one. Throws InvalidArgument naming `path`
 // and the key for a value that does not parse.
 RunSettings resumed_settings(const models::CheckpointFile& f, const std::string& path, RunSettings asked);
 
