@@ -23,7 +23,7 @@ namespace {
 
 struct Run {
   std::vector<double> losses;
-  std::vector<Tensor> params, buffers;  // CPU copies
+  std::vector<Tensor> params, buffers, averaged;  // CPU copies
   std::vector<std::string> names, buffer_names;
   std::vector<std::uint64_t> submits;   // per step (Vulkan)
 };
@@ -58,7 +58,7 @@ std::vector<Sample> data_for(const ModelConfig& c) {
           fixtures::wave_sample(7, 6, 1.f, w)};
 }
 
-Run train(const ModelConfig& c, Device d, int epochs, const std::string& save_to = {}) {
+Run train(const ModelConfig& c, Device d, int epochs, const std::string& save_to = {}, float average_decay = 0.f) {
   const auto data = data_for(c);
   auto m = make_model(c, 11);
   m->to(d);
@@ -67,6 +67,7 @@ Run train(const ModelConfig& c, Device d, int epochs, const std::string& save_to
   o.sample_vertices = 25;
   o.batch_size = 4;  // one step per epoch
   o.seed = 5;
+  o.average_decay = average_decay;
   Trainer t(*m, o, Normaliser::fit(data, c.task == Task::displacement));
   Run r;
   for (int e = 0; e < epochs; ++e) {
@@ -80,6 +81,10 @@ Run train(const ModelConfig& c, Device d, int epochs, const std::string& save_to
     REQUIRE(p.var.device() == d);
     r.params.push_back(to(p.var.value(), Device::cpu).clone());
     r.names.push_back(p.name);
+  }
+  for (const Tensor& a : t.averaged()) {
+    REQUIRE(a.device() == d);
+    r.averaged.push_back(to(a, Device::cpu).clone());
   }
   for (const auto& b : m->registry().buffers) {
     REQUIRE(b.tensor.device() == d);
@@ -121,6 +126,12 @@ void compare(const Run& c, const Run& g, float lr) {
     const bool noise = c.params[k].rows() == 1;
     vkt::require_close(c.params[k], g.params[k], 1e-3f, noise ? noise_bound : 1e-4f, "parameter");
   }
+  REQUIRE(c.averaged.size() == g.averaged.size());
+  for (std::size_t k = 0; k < c.averaged.size(); ++k) {
+    INFO("averaged parameter " << k << " " << c.names[k]);
+    const bool noise = c.averaged[k].rows() == 1;
+    vkt::require_close(c.averaged[k], g.averaged[k], 1e-3f, noise ? noise_bound : 1e-4f, "averaged parameter");
+  }
   for (std::size_t k = 0; k < c.buffers.size(); ++k) {
     INFO("buffer " << k << " " << c.buffer_names[k]);
     // A running mean follows the batch mean, which those biases shift 1:1.
@@ -129,10 +140,10 @@ void compare(const Run& c, const Run& g, float lr) {
   }
 }
 
-void parity(const ModelConfig& c) {
+void parity(const ModelConfig& c, float average_decay = 0.f) {
   const int epochs = 4;
-  const Run cpu = train(c, Device::cpu, epochs);
-  const Run vk = train(c, Device::vulkan, epochs);
+  const Run cpu = train(c, Device::cpu, epochs, {}, average_decay);
+  const Run vk = train(c, Device::vulkan, epochs, {}, average_decay);
   compare(cpu, vk, TrainOptions::defaults_for(c).lr);
   // One submission per training step: the loss read (first step included:
   // uploads of parameters, batch data and graphs are recorded, not submitted).
@@ -156,6 +167,25 @@ TEST_CASE("vulkan trainer: reduced DenseGATs with the linear skip trains like th
   ModelConfig c = reduced("densegats");
   c.linear_skip = true;
   parity(c);
+}
+
+TEST_CASE("vulkan trainer: the moving average of the weights follows the CPU's, with no extra submission", "[vulkan]") {
+  if (!vkt::ready()) return;
+  parity(reduced("densegats"), 0.5f);
+  // A device checkpoint holds the average as the model, the last step's weights beside it.
+  const ModelConfig c = reduced("densegats");
+  const auto path = (std::filesystem::temp_directory_path() /
+                     ("gatcore_vk_average_" + std::to_string(::getpid()) + ".gcm"))
+                        .string();
+  const Run vk = train(c, Device::vulkan, 3, path, 0.5f);
+  LoadedModel l = load_checkpoint(path);
+  for (std::size_t k = 0; k < vk.params.size(); ++k) {
+    vkt::require_close(vk.averaged[k], l.model->registry().params[k].var.value(), 0.f, 0.f, "saved average");
+    const Tensor* raw = l.file.find("optim.raw." + vk.names[k]);
+    REQUIRE(raw);
+    vkt::require_close(vk.params[k], *raw, 0.f, 0.f, "saved last-step weights");
+  }
+  std::filesystem::remove(path);
 }
 
 TEST_CASE("vulkan trainer: reduced NeuroSkinning trains like the CPU", "[vulkan]") {
