@@ -128,26 +128,32 @@ TEST_CASE("weight averaging: the average follows its rule, validation and checkp
   Trainer t(*m, o, norm);
   REQUIRE(t.averaging());
   const auto& params = m->registry().params;
+  // Averaged: the parameters, then the buffers (BatchNorm statistics).
+  std::vector<Tensor> live;
+  for (const auto& p : params) live.push_back(p.var.value());
+  for (const auto& b : m->registry().buffers) live.push_back(b.tensor);
+  REQUIRE(m->registry().buffers.size() > 0);
+  REQUIRE(t.averaged().size() == live.size());
   // The rule, in double beside the trainer: after step s (counted from 1)
   // avg = d avg + (1 - d) param, d = min(decay, (1 + s) / (10 + s)).
   std::vector<std::vector<double>> expect;
-  for (const auto& p : params) {
-    const auto v = p.var.value().to_vector();
+  for (const Tensor& x : live) {
+    const auto v = x.to_vector();
     expect.emplace_back(v.begin(), v.end());
   }
   const auto follow = [&](int, std::int64_t, std::int64_t, double) {
     const double s = double(t.optimiser().steps());
     const double d = std::min(0.75, (1 + s) / (10 + s));
-    for (std::size_t k = 0; k < params.size(); ++k) {
-      const auto v = params[k].var.value().to_vector();
+    for (std::size_t k = 0; k < live.size(); ++k) {
+      const auto v = live[k].to_vector();
       for (std::size_t i = 0; i < v.size(); ++i) expect[k][i] = d * expect[k][i] + (1 - d) * double(v[i]);
     }
   };
   for (int e = 0; e < 4; ++e) t.run_epoch(data, {}, follow);
   CHECK(t.optimiser().steps() == 12);
   double gap = 0;  // the average is not the last step's weights
-  for (std::size_t k = 0; k < params.size(); ++k) {
-    const auto a = t.averaged()[k].to_vector(), v = params[k].var.value().to_vector();
+  for (std::size_t k = 0; k < live.size(); ++k) {
+    const auto a = t.averaged()[k].to_vector(), v = live[k].to_vector();
     for (std::size_t i = 0; i < a.size(); ++i) {
       CHECK(a[i] == Approx(expect[k][i]).margin(1e-6));
       gap = std::max(gap, std::abs(double(a[i]) - double(v[i])));
@@ -173,6 +179,9 @@ TEST_CASE("weight averaging: the average follows its rule, validation and checkp
   const std::string path = tmp_path("average");
   save_checkpoint(path, *m, norm, &t);
   CHECK(params[0].var.value().to_vector() == raw);
+  const auto& buffer = m->registry().buffers.front();
+  const auto raw_buffer = buffer.tensor.to_vector(), averaged_buffer = t.averaged()[params.size()].to_vector();
+  CHECK(raw_buffer != averaged_buffer);
   const EpochStats uninterrupted = t.run_epoch(data, {data[2]});
   LoadedModel l = load_checkpoint(path);
   CHECK(l.file.metadata.at("average_decay") == "0.75");
@@ -180,6 +189,9 @@ TEST_CASE("weight averaging: the average follows its rule, validation and checkp
   REQUIRE(l.file.find("optim.raw." + params[0].name));
   CHECK(l.file.find("optim.raw." + params[0].name)->to_vector() == raw);
   CHECK(l.model->registry().find_param(params[0].name)->value().to_vector() != raw);
+  REQUIRE(l.file.find("optim.raw." + buffer.name));
+  CHECK(l.file.find("optim.raw." + buffer.name)->to_vector() == raw_buffer);
+  CHECK(l.model->registry().find_buffer(buffer.name)->to_vector() == averaged_buffer);
 
   // Resuming continues the same run: same losses, same average, same weights.
   Trainer t2(*l.model, o, l.norm);
@@ -187,10 +199,11 @@ TEST_CASE("weight averaging: the average follows its rule, validation and checkp
   const EpochStats resumed = t2.run_epoch(data, {data[2]});
   CHECK(resumed.train_loss == uninterrupted.train_loss);
   CHECK(resumed.val_loss == uninterrupted.val_loss);
-  for (std::size_t k = 0; k < params.size(); ++k) {
+  for (std::size_t k = 0; k < params.size(); ++k)
     CHECK(l.model->registry().params[k].var.value().to_vector() == params[k].var.value().to_vector());
-    CHECK(t2.averaged()[k].to_vector() == t.averaged()[k].to_vector());
-  }
+  for (std::size_t k = 0; k < m->registry().buffers.size(); ++k)
+    CHECK(l.model->registry().buffers[k].tensor.to_vector() == m->registry().buffers[k].tensor.to_vector());
+  for (std::size_t k = 0; k < live.size(); ++k) CHECK(t2.averaged()[k].to_vector() == t.averaged()[k].to_vector());
 
   // A file with the last step's weights of only some parameters is refused.
   CheckpointFile partial = l.file;

@@ -127,10 +127,12 @@ void compare(const Run& c, const Run& g, float lr) {
     vkt::require_close(c.params[k], g.params[k], 1e-3f, noise ? noise_bound : 1e-4f, "parameter");
   }
   REQUIRE(c.averaged.size() == g.averaged.size());
-  for (std::size_t k = 0; k < c.averaged.size(); ++k) {
-    INFO("averaged parameter " << k << " " << c.names[k]);
-    const bool noise = c.averaged[k].rows() == 1;
-    vkt::require_close(c.averaged[k], g.averaged[k], 1e-3f, noise ? noise_bound : 1e-4f, "averaged parameter");
+  for (std::size_t k = 0; k < c.averaged.size(); ++k) {  // the parameters, then the buffers
+    const bool param = k < c.names.size();
+    const std::string& name = param ? c.names[k] : c.buffer_names[k - c.names.size()];
+    INFO("averaged " << k << " " << name);
+    const bool noise = param ? c.averaged[k].rows() == 1 : name.find("running_mean") != std::string::npos;
+    vkt::require_close(c.averaged[k], g.averaged[k], 1e-3f, noise ? noise_bound : 1e-4f, "averaged tensor");
   }
   for (std::size_t k = 0; k < c.buffers.size(); ++k) {
     INFO("buffer " << k << " " << c.buffer_names[k]);
@@ -179,11 +181,19 @@ TEST_CASE("vulkan trainer: the moving average of the weights follows the CPU's, 
                         .string();
   const Run vk = train(c, Device::vulkan, 3, path, 0.5f);
   LoadedModel l = load_checkpoint(path);
+  REQUIRE(vk.averaged.size() == vk.params.size() + vk.buffers.size());
   for (std::size_t k = 0; k < vk.params.size(); ++k) {
     vkt::require_close(vk.averaged[k], l.model->registry().params[k].var.value(), 0.f, 0.f, "saved average");
     const Tensor* raw = l.file.find("optim.raw." + vk.names[k]);
     REQUIRE(raw);
     vkt::require_close(vk.params[k], *raw, 0.f, 0.f, "saved last-step weights");
+  }
+  for (std::size_t k = 0; k < vk.buffers.size(); ++k) {
+    vkt::require_close(vk.averaged[vk.params.size() + k], l.model->registry().buffers[k].tensor, 0.f, 0.f,
+                       "saved averaged buffer");
+    const Tensor* raw = l.file.find("optim.raw." + vk.buffer_names[k]);
+    REQUIRE(raw);
+    vkt::require_close(vk.buffers[k], *raw, 0.f, 0.f, "saved last-step buffer");
   }
   std::filesystem::remove(path);
 }

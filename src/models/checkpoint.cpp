@@ -342,7 +342,7 @@ LoadedModel load_checkpoint_file(CheckpointFile file, const std::string& path) {
     return reg.find_param(name) || reg.find_buffer(name) || name == "norm.mean" || name == "norm.inv_std" ||
            (name.rfind("optim.m.", 0) == 0 && reg.find_param(name.substr(8))) ||
            (name.rfind("optim.v.", 0) == 0 && reg.find_param(name.substr(8))) ||
-           (name.rfind("optim.raw.", 0) == 0 && reg.find_param(name.substr(10)));
+           (name.rfind("optim.raw.", 0) == 0 && (reg.find_param(name.substr(10)) || reg.find_buffer(name.substr(10))));
   };
   for (const auto& [name, t] : f.tensors)
     if (!known(name)) fail(path, "unknown tensor '" + name + "' (not part of model '" + cfg.name + "')");

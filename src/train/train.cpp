@@ -109,12 +109,18 @@ Trainer::Trainer(Model& model, TrainOptions opt, Normaliser norm, dist::Communic
   GATCORE_CHECK(opt.average_decay >= 0.f && opt.average_decay < 1.f, "Trainer: the weight-average decay ",
                 opt.average_decay, " is outside [0, 1)");
   if (opt.average_decay > 0.f)
-    for (const auto& p : model.registry().params) {
-      const Tensor& v = p.var.value();
+    for (const Tensor& v : averaged_tensors()) {
       Backend& be = backend(v.device());
       average_.push_back(be.empty(v.rows(), v.cols()));
       be.copy(v, average_.back());
     }
+}
+
+std::vector<Tensor> Trainer::averaged_tensors() const {
+  std::vector<Tensor> out;
+  for (const auto& p : model_.registry().params) out.push_back(p.var.value());
+  for (const auto& b : model_.registry().buffers) out.push_back(b.tensor);
+  return out;
 }
 
 void Trainer::update_average() {
@@ -122,18 +128,16 @@ void Trainer::update_average() {
   // on the average follows the parameters closely.
   const double t = double(adam_.steps());
   const float d = std::min(opt_.average_decay, float((1.0 + t) / (10.0 + t)));
-  const auto& params = model_.registry().params;
-  for (std::size_t k = 0; k < params.size(); ++k) {
-    const Tensor& v = params[k].var.value();
-    backend(v.device()).axpby(d, average_[k], 1.f - d, v, average_[k]);
-  }
+  const std::vector<Tensor> live = averaged_tensors();
+  for (std::size_t k = 0; k < live.size(); ++k)
+    backend(live[k].device()).axpby(d, average_[k], 1.f - d, live[k], average_[k]);
 }
 
 void Trainer::swap_averaged() {
   if (average_.empty()) return;
-  const auto& params = model_.registry().params;
-  for (std::size_t k = 0; k < params.size(); ++k) {
-    const Tensor& v = params[k].var.value();
+  const std::vector<Tensor> live = averaged_tensors();
+  for (std::size_t k = 0; k < live.size(); ++k) {
+    const Tensor& v = live[k];
     Backend& be = backend(v.device());
     Tensor keep = be.empty(v.rows(), v.cols());
     be.copy(v, keep);

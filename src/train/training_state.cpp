@@ -17,21 +17,30 @@ namespace {
   throw CheckpointError("checkpoint '" + path + "': " + what);
 }
 
+// The tensors a weight average covers, with their checkpoint names, in the
+// order of Trainer::averaged(): the parameters, then the buffers.
+std::vector<std::pair<std::string, Tensor>> averaged_entries(const Model& model) {
+  std::vector<std::pair<std::string, Tensor>> out;
+  for (const auto& p : model.registry().params) out.emplace_back(p.name, p.var.value());
+  for (const auto& b : model.registry().buffers) out.emplace_back(b.name, b.tensor);
+  return out;
+}
+
 }  // namespace
 
 void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm, const Trainer* trainer,
                      const std::map<std::string, std::string>& extra) {
   CheckpointFile f = model_checkpoint(model, norm, extra, path);
   if (trainer && trainer->averaging()) {
-    // The model's tensors become the average; the last step's weights move to
+    // The model's tensors become the average; the last step's move to
     // "optim.raw.*" (no swap: a CPU model's tensors in `f` share its storage).
-    const auto& params = model.registry().params;
-    for (std::size_t k = 0; k < params.size(); ++k) {
+    const auto entries = averaged_entries(model);
+    for (std::size_t k = 0; k < entries.size(); ++k) {
       auto it = std::find_if(f.tensors.begin(), f.tensors.end(),
-                             [&](const auto& nt) { return nt.first == params[k].name; });
+                             [&](const auto& nt) { return nt.first == entries[k].first; });
       Tensor raw = it->second;
       it->second = to(trainer->averaged()[k], Device::cpu);
-      f.tensors.emplace_back("optim.raw." + params[k].name, raw);
+      f.tensors.emplace_back("optim.raw." + entries[k].first, raw);
     }
     // The float's shortest text, so that the file says 0.98, not 0.98000001907.
     char text[32];
@@ -76,17 +85,18 @@ void restore_training_state(const CheckpointFile& f, Trainer& t, const std::stri
     }
   }
   // A run that averaged: the file's model is the average, and training goes on
-  // from the last step's weights.
+  // from the last step's weights and buffers.
+  const auto entries = averaged_entries(t.model());
   std::size_t raw = 0;
-  for (std::size_t k = 0; k < params.size(); ++k) raw += f.find("optim.raw." + params[k].name) != nullptr;
-  if (raw != 0 && raw != params.size())
+  for (const auto& [name, v] : entries) raw += f.find("optim.raw." + name) != nullptr;
+  if (raw != 0 && raw != entries.size())
     fail(path, "holds the last step's weights ('optim.raw.*') of " + std::to_string(raw) + " of " +
-                   std::to_string(params.size()) + " parameters: cannot resume");
-  for (std::size_t k = 0; k < params.size(); ++k) {
-    const Tensor& v = params[k].var.value();
+                   std::to_string(entries.size()) + " parameters and buffers: cannot resume");
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    const Tensor& v = entries[k].second;
     if (t.averaging()) backend(v.device()).copy(v, t.averaged()[k]);
     if (raw == 0) continue;
-    const std::string name = "optim.raw." + params[k].name;
+    const std::string name = "optim.raw." + entries[k].first;
     const Tensor* src = f.find(name);
     if (!src->same_shape(v)) fail(path, "shape mismatch for '" + name + "'");
     if (v.device() == Device::cpu) v.copy_from_(*src);

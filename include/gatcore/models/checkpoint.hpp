@@ -14,7 +14,8 @@
 // Tensor names: the model's parameters and buffers (BatchNorm running stats)
 // under their registry names; "norm.mean", "norm.inv_std" (feature
 // normalisation); "optim.m.<param>", "optim.v.<param>" (Adam moments);
-// "optim.raw.<param>" (a run that averages its weights: the last step's).
+// "optim.raw.<param or buffer>" (a run that averages its weights: the last
+// step's).
 // Metadata (strings): config, target_scale, epoch, lr, adam_steps, rng,
 // model_rng, plateau_best, plateau_has_best, plateau_bad_epochs, and any extra
 // entries of the caller (e.g. skeleton bone names).

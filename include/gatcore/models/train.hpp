@@ -200,8 +200,10 @@ class Trainer {
   // Restores the resumable state (checkpoints).
   void set_epoch(int e) { epoch_ = e; }
 
-  // options().average_decay > 0: the running average of the parameters
-  // (one tensor per model parameter, on the model's device).
+  // options().average_decay > 0: the running average of the parameters and
+  // of the buffers (BatchNorm's running statistics must match the averaged
+  // weights they normalise): one tensor per parameter, then one per buffer,
+  // in registry order, on the model's device.
   bool averaging() const { return !average_.empty(); }
   std::vector<Tensor>& averaged() { return average_; }
   const std::vector<Tensor>& averaged() const { return average_; }
@@ -224,6 +226,7 @@ class Trainer {
   std::vector<Tensor> average_;  // empty: no averaging
   bool swapped_ = false;         // the model holds the average now
   void update_average();
+  std::vector<Tensor> averaged_tensors() const;  // the model's tensors average_ follows
 };
 
 // The model holds its trainer's averaged weights for the scope's life (both
@@ -242,16 +245,16 @@ class AveragedWeightsScope {
 // save_checkpoint (checkpoint.hpp) with, when `trainer` is given, the state
 // to resume training: Adam moments ("optim.m.<param>", "optim.v.<param>"),
 // epoch, lr, adam_steps, rng and the plateau scheduler's state. A trainer
-// that averages writes the averaged weights as the model (what a user runs)
-// and the last step's weights as "optim.raw.<param>" (what training goes on
-// from). The model may
+// that averages writes the averaged weights and buffers as the model (what a
+// user runs) and the last step's as "optim.raw.<name>" (what training goes
+// on from). The model may
 // live on any device (tensors are downloaded before writing).
 void save_checkpoint(const std::string& path, const Model& model, const Normaliser& norm, const Trainer* trainer,
                      const std::map<std::string, std::string>& extra = {});
 
 // Restores optimiser moments, epoch, lr, RNG and scheduler state saved with
 // the trainer (the trainer must wrap the model loaded from the same file).
-// Where the file holds "optim.raw.<param>", the model goes on from those and
+// Where the file holds "optim.raw.<name>", the model goes on from those and
 // an averaging trainer's average from the file's model weights; an averaging
 // trainer resuming a file without them starts its average there.
 void restore_training_state(const CheckpointFile& f, Trainer& trainer, const std::string& path = "checkpoint");

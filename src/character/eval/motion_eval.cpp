@@ -214,8 +214,6 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
     std::string ext = fs::path(entry).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char x) { return char(std::tolower(x)); });
     const double cm = cm_per_unit > 0 ? cm_per_unit : (ext == ".glb" || ext == ".gltf") ? 100.0 : 0.0;
-    all_cm = all_cm && cm > 0;
-    common_cm = common_cm < 0 ? cm : (common_cm == cm ? cm : 0.0);
     const double to_world = 1.0 / double(pc.normalisation.scale);
     const std::int64_t n = pc.character.mesh.num_vertices();
     Row chrow{character_label(entry), "all", 0, n, cm, std::vector<Acc>(K)};
@@ -229,6 +227,13 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
     } else {
       for (const Motion& m : motions) seq_names.push_back(m.name);
     }
+    if (seq_names.empty()) {  // --targets without --motion: nothing to pose this one with
+      if (hooks.warn)
+        hooks.warn(character_label(entry) + " has no file targets and no --motion was given: not evaluated");
+      continue;
+    }
+    all_cm = all_cm && cm > 0;
+    common_cm = common_cm < 0 ? cm : (common_cm == cm ? cm : 0.0);
     // The rule for poses outside what training covered (--max-limit-excess):
     // frames whose joints leave the dataset's random-pose limits by more
     // than the given angle are left out (and counted).
@@ -351,8 +356,11 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
     }
     per_char.push_back(chrow);
   }
+  GATCORE_CHECK(!per_char.empty(), data, ": none of its ", part,
+                " characters has file targets (gat dataset build --target); give --motion BVH to evaluate on motions");
   // Report.
   auto stats_json = [&](const Acc& a, double cm) {
+    if (a.count == 0) return nlohmann::json{{"vertex_frames", 0}};  // every frame left out
     nlohmann::json j = {{"mean", a.mean()}, {"p99", a.quantile(0.99)}, {"max", a.max}, {"min", a.min},
                         {"vertex_frames", a.count}};
     if (cm > 0)
@@ -397,7 +405,7 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
   j["errormaps"] = maps;
   for (std::size_t k = 0; k < K; ++k) {
     j["overall"][methods[k]] = stats_json(overall[k], 0);
-    if (all_cm) {
+    if (all_cm && overall[k].count > 0) {
       j["overall"][methods[k]]["mean_cm"] = overall_cm[k].mean();
       j["overall"][methods[k]]["max_cm"] = overall_cm[k].max;
       if (common_cm > 0) j["overall"][methods[k]]["p99_cm"] = overall[k].quantile(0.99) * common_cm;
@@ -414,6 +422,10 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
      << u << "; p99: the 99th percentile, within 0.6 %):\n\n| method | mean | p99 | max | min |\n|---|---:|---:|---:|---:|\n";
   for (std::size_t k = 0; k < K; ++k) {
     const Acc& a = all_cm ? overall_cm[k] : overall[k];
+    if (a.count == 0) {  // every frame left out (--max-limit-excess)
+      md << "| " << methods[k] << " | - | - | - | - |\n";
+      continue;
+    }
     const double p99 = all_cm ? (common_cm > 0 ? overall[k].quantile(0.99) * common_cm : -1.0) : overall[k].quantile(0.99);
     md << "| " << methods[k] << " | " << fmt(a.mean()) << " | " << (p99 >= 0 ? fmt(p99) : std::string("-")) << " | "
        << fmt(a.max) << " | " << fmt(a.min) << " |\n";
@@ -435,8 +447,11 @@ MotionEvalReport evaluate_motions(const MotionEvalOptions& o, const MotionEvalHo
          << r.vertices << " |";
       const double s = all_cm ? r.cm : 1.0;
       for (std::size_t k = 0; k < K; ++k)
-        md << " " << fmt(r.acc[k].mean() * s) << " / " << fmt(r.acc[k].quantile(0.99) * s) << " / "
-           << fmt(r.acc[k].max * s) << " / " << fmt(r.acc[k].min * s) << " |";
+        if (r.acc[k].count == 0)  // every frame left out (--max-limit-excess)
+          md << " - |";
+        else
+          md << " " << fmt(r.acc[k].mean() * s) << " / " << fmt(r.acc[k].quantile(0.99) * s) << " / "
+             << fmt(r.acc[k].max * s) << " / " << fmt(r.acc[k].min * s) << " |";
       md << "\n";
     }
   MotionEvalReport report;
