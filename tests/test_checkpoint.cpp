@@ -214,6 +214,22 @@ TEST_CASE("weight averaging: the average follows its rule, validation and checkp
   Trainer t3(*lp.model, o, lp.norm);
   CHECK_THROWS_WITH(restore_training_state(lp.file, t3, bad),
                     Catch::Contains(bad) && Catch::Contains("optim.raw") && Catch::Contains("cannot resume"));
+  // Bad last-step tensors and decays are refused by name.
+  CheckpointFile odd = l.file;
+  odd.tensors.emplace_back("optim.raw.no_such_param", Tensor::zeros(1, 1));
+  write_checkpoint_file(bad, odd);
+  CHECK_THROWS_WITH(load_checkpoint(bad), Catch::Contains("unknown tensor 'optim.raw.no_such_param'"));
+  CheckpointFile misshaped = l.file;
+  for (auto& [name, x] : misshaped.tensors)
+    if (name == "optim.raw." + params[0].name) x = Tensor::zeros(1, 1);
+  write_checkpoint_file(bad, misshaped);
+  LoadedModel lm = load_checkpoint(bad);
+  Trainer t4(*lm.model, o, lm.norm);
+  CHECK_THROWS_WITH(restore_training_state(lm.file, t4, bad),
+                    Catch::Contains("shape mismatch for 'optim.raw." + params[0].name + "'"));
+  CheckpointFile decay = l.file;
+  decay.metadata["average_decay"] = "1.5";
+  CHECK_THROWS_WITH(read_training_progress(decay, bad), Catch::Contains("average_decay"));
   // A decay of 1 would never move.
   TrainOptions one = o;
   one.average_decay = 1.f;

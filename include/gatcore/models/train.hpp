@@ -68,8 +68,8 @@ struct TrainOptions {
   // fp32 where the model's backend has no bf16 products (see
   // training_precision); options().precision is what runs.
   Precision precision = Precision::fp32;
-  // An exponential moving average of the parameters (Polyak averaging):
-  // after every step avg = d * avg + (1 - d) * param, with d = min(decay,
+  // An exponential moving average of the parameters and buffers (Polyak
+  // averaging): after every step avg = d * avg + (1 - d) * x, with d = min(decay,
   // (1 + t) / (10 + t)) at step t so that the first steps are not frozen in.
   // Validation and checkpoints then use the averaged weights, which vary less
   // from epoch to epoch than the last step's. 0: off.
@@ -207,7 +207,7 @@ class Trainer {
   bool averaging() const { return !average_.empty(); }
   std::vector<Tensor>& averaged() { return average_; }
   const std::vector<Tensor>& averaged() const { return average_; }
-  // Exchanges the model's parameters with their running average (a no-op
+  // Exchanges the model's parameters and buffers with their running average (a no-op
   // without averaging): validation and checkpoints run between two calls.
   void swap_averaged();
 
