@@ -430,6 +430,52 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
   }
 }
 
+TEST_CASE("the classifier's dropout acts while training only, and is recorded in the configuration", "[skin_any]") {
+  const PreparedCharacter a = procedural(ProceduralKind::humanoid, 1);
+  const int k = 4;
+  const std::vector<models::Sample> train{bone_candidate_sample(a, k)};
+  const models::Normaliser norm = models::Normaliser::fit(train, false);
+  models::ModelConfig plain = small_any_config(k);
+  plain.classifier = {32, 16};
+  models::ModelConfig dropped = plain;
+  dropped.classifier_dropout = 0.5f;
+  // The same seed draws the same weights: dropout takes no initial values.
+  auto p = models::make_model(plain, 5), d = models::make_model(dropped, 5);
+  randomise_last_layer(*p, 9);
+  randomise_last_layer(*d, 9);
+  const models::Batch b = models::make_batch({&train[0]}, {{}}, norm, {});
+  const Tensor pe = p->forward(b, false).value(), de = d->forward(b, false).value();
+  const Tensor pt = p->forward(b, true).value(), dt = d->forward(b, true).value();
+  REQUIRE(pe.rows() == de.rows());
+  double eval_diff = 0, train_diff = 0;
+  for (std::int64_t v = 0; v < pe.rows(); ++v)
+    for (std::int64_t j = 0; j < pe.cols(); ++j) {
+      eval_diff = std::max(eval_diff, double(std::fabs(pe.at(v, j) - de.at(v, j))));
+      train_diff = std::max(train_diff, double(std::fabs(pt.at(v, j) - dt.at(v, j))));
+    }
+  CHECK(eval_diff == 0.0);  // inference (and validation) never drops units
+  CHECK(train_diff > 1e-3);
+  // A configuration round-trips the rate; one written before the key reads as none.
+  CHECK(models::ModelConfig::from_text(dropped.to_text()) == dropped);
+  CHECK(models::ModelConfig::from_text("name = skinweights-any\n").classifier_dropout == 0.0f);
+  // A rate that would drop every unit (or a negative one, from an edited file) is refused by name.
+  for (const float bad : {1.0f, -0.1f}) {
+    dropped.classifier_dropout = bad;
+    CHECK_THROWS_WITH(models::make_model(dropped, 5), Catch::Contains("classifier_dropout must be in [0, 1)"));
+  }
+  // It still learns: the dropped model's KL on its character falls as the plain one's does.
+  models::TrainOptions opt = models::TrainOptions::defaults_for(plain);
+  opt.batch_size = 1;
+  opt.sampling = models::Sampling::full;
+  opt.lr = 3e-3f;
+  models::Trainer t(*d, opt, norm);
+  const double before = t.evaluate(train);
+  for (int e = 0; e < 40; ++e) t.run_epoch(train);
+  const double after = t.evaluate(train);
+  INFO("KL before " << before << ", after " << after);
+  CHECK(after < 0.7 * before);
+}
+
 TEST_CASE("a batch takes every sample's log prior or none", "[skin_any]") {
   const PreparedCharacter a = procedural(ProceduralKind::humanoid, 1);
   const models::Sample with = bone_candidate_sample(a, 4);

@@ -102,6 +102,19 @@ TEST_CASE("training run: each option applies to the models it names") {
   r.pair_scorer = {16, 8};
   apply_architecture_options(any, r);
   CHECK(any.pair_scorer == std::vector<std::int64_t>{16, 8});
+  CHECK(any.classifier_dropout == 0.0f);  // not asked: the paper's network
+
+  r = {};
+  r.data = "d.json";
+  r.classifier_dropout = 0.5f;
+  for (const char* name : {"neuroskinning", "neuroskinning-nopool", "skinweights-any"})
+    CHECK(check_new_model_options(config(name), r).empty());
+  for (const char* name : {"densegats", "fc", "pointnet"})
+    CHECK(check_new_model_options(config(name), r) ==
+          std::string("--classifier-dropout applies to the NeuroSkinning family (neuroskinning, neuroskinning-nopool, "
+                      "skinweights-any), not ") + name);
+  apply_architecture_options(any, r);
+  CHECK(any.classifier_dropout == 0.5f);
 }
 
 TEST_CASE("training run: a checkpoint's model keeps its architecture") {
@@ -119,6 +132,17 @@ TEST_CASE("training run: a checkpoint's model keeps its architecture") {
   CHECK(check_checkpoint_architecture(c, r).empty());
   r.pair_scorer = {8};
   CHECK(check_checkpoint_architecture(c, r) == "m.gcm has no pair scorer; a resumed run keeps its architecture (drop --pair-scorer)");
+
+  ModelConfig any = config("skinweights-any");
+  any.classifier_dropout = 0.5f;
+  r = {};
+  r.resume = "m.gcm";
+  CHECK(check_checkpoint_architecture(any, r).empty());  // not asked: the checkpoint's
+  r.classifier_dropout = 0.5f;
+  CHECK(check_checkpoint_architecture(any, r).empty());
+  r.classifier_dropout = 0.25f;
+  CHECK(check_checkpoint_architecture(any, r) ==
+        "m.gcm was trained with classifier dropout 0.5; a resumed run keeps it (drop --classifier-dropout)");
 }
 
 TEST_CASE("training run: --keep-best's figure and --world-columns") {

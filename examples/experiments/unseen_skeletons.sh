@@ -6,7 +6,7 @@
 #
 #   examples/experiments/unseen_skeletons.sh [--folds "women creatures khronos"] [--minutes M]
 #       [--sampling consecutive|random|full] [--pair-scorer W,...] [--world-columns ignore|use]
-#       [--precision fp32|bf16] [--lr-schedule step|cosine|plateau] [--average-decay D] [--seed S] [--heat-blend S] [--augment KINDS [--augment-copies N]]
+#       [--precision fp32|bf16] [--lr-schedule step|cosine|plateau] [--average-decay D] [--classifier-dropout P] [--seed S] [--heat-blend S] [--augment KINDS [--augment-copies N]]
 #       [--corpus use|ignore|auto] [--evaluate-only] [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
@@ -68,6 +68,8 @@
 # --lr-schedule trains skinweights-any with that learning-rate schedule (gat
 # train --lr-schedule; cosine anneals from the initial rate over the fold's
 # --minutes); without it, the model's default.
+# --classifier-dropout P trains skinweights-any with dropout P after each of
+# its classifier's hidden layers (gat train --classifier-dropout).
 # --average-decay D trains skinweights-any with a moving average of its
 # weights (gat train --average-decay): validation, --keep-best and the
 # evaluated model use the average.
@@ -86,7 +88,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= world_columns= precision=fp32
-heat_blend= augment= augment_copies=2 corpus=auto evaluate_only=0 lr_schedule= average_decay=
+heat_blend= augment= augment_copies=2 corpus=auto evaluate_only=0 lr_schedule= average_decay= classifier_dropout=
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/tools/gat"
@@ -103,6 +105,7 @@ while [ $# -gt 0 ]; do
     --precision) precision="${2:?--precision needs fp32 or bf16}"; shift 2 ;;
     --lr-schedule) lr_schedule="${2:?--lr-schedule needs step, cosine or plateau}"; shift 2 ;;
     --average-decay) average_decay="${2:?--average-decay needs a decay in [0, 1)}"; shift 2 ;;
+    --classifier-dropout) classifier_dropout="${2:?--classifier-dropout needs a probability}"; shift 2 ;;
     --heat-blend) heat_blend="${2:?--heat-blend needs a share in (0, 1]}"; shift 2 ;;
     --evaluate-only) evaluate_only=1; shift ;;
     --corpus) corpus="${2:?--corpus needs use, ignore or auto}"; shift 2 ;;
@@ -282,7 +285,7 @@ PY
     --val-every 1 --batch 4 --sample-vertices 512 --sampling "$sampling" ${pair_scorer:+--pair-scorer "$pair_scorer"} \
     ${world_columns:+--world-columns "$world_columns"} \
     --precision "$precision" ${lr_schedule:+--lr-schedule "$lr_schedule"} \
-    ${average_decay:+--average-decay "$average_decay"} --out "$dir/skinweights-any.gcm" \
+    ${average_decay:+--average-decay "$average_decay"} ${classifier_dropout:+--classifier-dropout "$classifier_dropout"} --out "$dir/skinweights-any.gcm" \
     --keep-best "$dir/skinweights-any.best.gcm" >"$dir/skinweights-any.train.log" 2>&1 \
     || { cat "$dir/skinweights-any.train.log" >&2; die "training on $fold failed"; }
   log "$fold: $(tail -n 1 "$dir/skinweights-any.train.log")"

@@ -159,6 +159,7 @@ const std::vector<Field>& fields() {
       int_field("pair_features", &ModelConfig::pair_features),
       list_field("global_mlp", &ModelConfig::global_mlp),
       list_field("classifier", &ModelConfig::classifier),
+      float_field("classifier_dropout", &ModelConfig::classifier_dropout),
       list_field("fc", &ModelConfig::fc),
       float_field("dropout", &ModelConfig::dropout),
       float_field("slope", &ModelConfig::slope),

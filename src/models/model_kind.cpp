@@ -49,6 +49,10 @@ bool predicts_displacement(ModelKind k) { return is_densegats_family(k) || k == 
 bool predicts_skin_weights(ModelKind k) { return !predicts_displacement(k); }
 bool deployable(ModelKind k) { return predicts_displacement(k); }
 bool any_skeleton(ModelKind k) { return k == ModelKind::skinweights_any; }
+bool has_neuroskinning_classifier(ModelKind k) {
+  return k == ModelKind::neuroskinning || k == ModelKind::neuroskinning_nopool || k == ModelKind::skinweights_any;
+}
+
 bool uses_neuroskinning_features(ModelKind k) {
   return k == ModelKind::neuroskinning || k == ModelKind::neuroskinning_nopool || k == ModelKind::fc ||
          k == ModelKind::pointnet;

@@ -51,8 +51,12 @@ class NeuroSkinning final : public Model {
         global_width_ = global_.out_width(w);
       }
     }
+    GATCORE_CHECK(c.classifier_dropout >= 0.f && c.classifier_dropout < 1.f,
+                  "neuroskinning: classifier_dropout must be in [0, 1), got ", c.classifier_dropout);
     const bool shared = !c.pair_scorer.empty();
-    classifier_ = nn::Mlp(root.sub("classifier"), w + global_width_, c.classifier, shared ? 0 : c.out_dim, dl, init);
+    nn::DenseLayerOptions cl = dl;
+    cl.dropout = c.classifier_dropout;
+    classifier_ = nn::Mlp(root.sub("classifier"), w + global_width_, c.classifier, shared ? 0 : c.out_dim, cl, init);
     nn::Linear* last = &classifier_.last;
     if (shared) {
       GATCORE_CHECK(c.task == Task::weights && !c.classifier.empty() && c.pair_features > 0 &&

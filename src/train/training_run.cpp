@@ -1,6 +1,7 @@
 #include "gatcore/train/training_run.hpp"
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 
@@ -12,6 +13,14 @@ namespace gatcore::train {
 
 using models::ModelConfig;
 using models::Task;
+
+namespace {
+std::string number_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+}  // namespace
 
 std::string check_request(const RunRequest& r) {
   if (!r.init.empty() && r.data.empty()) return "--init " + r.init + " fine-tunes on a dataset: give --data";
@@ -77,6 +86,9 @@ std::string check_new_model_options(const ModelConfig& cfg, const RunRequest& r)
   } else if (!r.pair_scorer.empty()) {
     return "--pair-scorer applies to skinweights-any, not " + cfg.name;
   }
+  if (r.classifier_dropout >= 0 && !models::has_neuroskinning_classifier(kind))
+    return "--classifier-dropout applies to the NeuroSkinning family (neuroskinning, neuroskinning-nopool, "
+           "skinweights-any), not " + cfg.name;
   if (!r.loss.empty() && cfg.task == Task::weights)
     return "--loss applies to displacement models; " + cfg.name + " learns skin weights (KL)";
   if (r.linear_skip && (!models::predicts_displacement(kind) || cfg.task != Task::displacement))
@@ -86,6 +98,7 @@ std::string check_new_model_options(const ModelConfig& cfg, const RunRequest& r)
 
 void apply_architecture_options(ModelConfig& cfg, const RunRequest& r) {
   if (models::any_skeleton(cfg.kind())) cfg.pair_scorer = r.pair_scorer;
+  if (r.classifier_dropout >= 0) cfg.classifier_dropout = r.classifier_dropout;
   if (!r.loss.empty()) cfg.loss = r.loss == "l1" ? models::DisplacementLoss::l1 : models::DisplacementLoss::mse;
   if (r.linear_skip) cfg.linear_skip = true;
 }
@@ -99,6 +112,9 @@ std::string check_checkpoint_architecture(const ModelConfig& cfg, const RunReque
   if (!r.resume.empty() && !r.pair_scorer.empty() && r.pair_scorer != cfg.pair_scorer)
     return r.resume + " has " + (cfg.pair_scorer.empty() ? "no pair scorer" : "another pair scorer") +
            "; a resumed run keeps its architecture (drop --pair-scorer)";
+  if (!r.resume.empty() && r.classifier_dropout >= 0 && r.classifier_dropout != cfg.classifier_dropout)
+    return r.resume + " was trained with classifier dropout " + number_text(cfg.classifier_dropout) +
+           "; a resumed run keeps it (drop --classifier-dropout)";
   return "";
 }
 

@@ -61,6 +61,7 @@ struct TrainArgs {
   double average_decay = -1;  // < 0: not given
   long val_every = 1, sample_vertices = 0;
   std::vector<std::int64_t> pair_scorer;
+  double classifier_dropout = -1;  // < 0: not given
   std::string world_columns;  // skinweights-any: use | ignore; empty: the default (or a resumed checkpoint's)
   bool linear_skip = false;
   gat::CommonOptions common;
@@ -160,6 +161,11 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "(e.g. 64) from the vertex's context and the pair's columns, instead of a classifier output column "
                "per candidate slot")
       ->delimiter(',')->check(int_in(1, 4096));
+  c.add_option("--classifier-dropout", a->classifier_dropout,
+               "the NeuroSkinning family (neuroskinning, skinweights-any): drop each hidden unit of the classifier "
+               "with probability P while training (e.g. 0.5), a regulariser against learning the training "
+               "families' conventions; recorded in the checkpoint's configuration (default 0: none, the paper)")
+      ->check(CLI::Range(0.0, 0.95));
   c.add_option("--world-columns", a->world_columns,
                "skinweights-any: the vertex's world-frame rest position and normal, the only inputs not measured "
                "from the character's own bones: ignore (default; they normalise to 0, so the model cannot learn where "
@@ -195,7 +201,8 @@ gat::Runner gat::setup_train(CLI::App& gat) {
     TrainArgs args = *a;
     if (!c.count("--samples")) args.samples = -1;  // not given: the source's default
     args.lr_set = c.count("--lr") > 0;
-    for (const char* f : {"--model", "--task", "--loss", "--linear-skip", "--joint-columns", "--pair-scorer"})
+    for (const char* f : {"--model", "--task", "--loss", "--linear-skip", "--joint-columns", "--pair-scorer",
+                          "--classifier-dropout"})
       if (c.count(f)) args.architecture_flags.push_back(f);
     return run_train(std::move(args));
   };
@@ -235,8 +242,8 @@ int run_train(TrainArgs a) {
   }
   const Device dev = gat::device_from_flag(a.common.device, "train");
 
-  train::RunRequest request{resume, init, data, loss, linear_skip, a.pair_scorer, a.world_columns,
-                            a.architecture_flags, keep_best_by};
+  train::RunRequest request{resume, init, data, loss, linear_skip, a.pair_scorer, float(a.classifier_dropout),
+                            a.world_columns, a.architecture_flags, keep_best_by};
   const auto refuse = [](const std::string& why) {
     std::fprintf(stderr, "gat train: %s\n", why.c_str());
     return 2;

@@ -64,6 +64,11 @@ struct ModelConfig {
   int pair_features = 0;
   std::vector<std::int64_t> global_mlp{512, 1024};
   std::vector<std::int64_t> classifier{1024, 512};
+  // Dropout after each of the classifier's hidden layers while training
+  // (the NeuroSkinning family). A regulariser, not the paper's architecture:
+  // with a hundred training characters the classifier learns its training
+  // families' conventions. 0 = none (configs before the key: 0).
+  float classifier_dropout = 0.f;
   // FC baseline (NeuroSkinning Table 7)
   std::vector<std::int64_t> fc{1024, 512, 512, 256};
   float dropout = 0.6f;

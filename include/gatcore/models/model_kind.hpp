@@ -41,6 +41,9 @@ bool deployable(ModelKind k);
 // Works on any skeleton without bone names: its output columns are each vertex's own
 // candidate bones, not a fixed skeleton's (skinweights-any).
 bool any_skeleton(ModelKind k);
+// NeuroSkinning's network (graph units, global feature, classifier): neuroskinning,
+// its pooling ablation and skinweights-any.
+bool has_neuroskinning_classifier(ModelKind k);
 // Reads the NeuroSkinning per-vertex features and trains with NeuroSkinning's
 // defaults (batch 12, random vertex samples, step schedule).
 bool uses_neuroskinning_features(ModelKind k);

@@ -26,6 +26,7 @@ struct RunRequest {
   std::string loss;    // mse | l1
   bool linear_skip = false;
   std::vector<std::int64_t> pair_scorer;
+  float classifier_dropout = -1;                // < 0: not given
   std::string world_columns;                    // use | ignore
   std::vector<std::string> architecture_flags;  // given options that a fine-tune takes from its checkpoint
   std::string keep_best_by;                     // loss | l1
@@ -58,7 +59,8 @@ std::string check_resumed_data(const std::string& resume, const std::string& che
 // A new model of `cfg` (its kind and task chosen): each option applies to
 // the models it names.
 std::string check_new_model_options(const models::ModelConfig& cfg, const RunRequest& r);
-// The asked architecture options on a new model's config (loss, linear skip, pair scorer).
+// The asked architecture options on a new model's config (loss, linear skip,
+// pair scorer, classifier dropout).
 void apply_architecture_options(models::ModelConfig& cfg, const RunRequest& r);
 
 // A checkpoint's model (resumed or fine-tuned) keeps its architecture.

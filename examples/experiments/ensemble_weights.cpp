@@ -1,0 +1,178 @@
+// Two post-processings of skinweights-any, measured before either goes in
+// the library (docs/experiments/skin-weights.md):
+//   ensemble_weights DATASET.json MODEL.gcm...
+// - the ensemble: the candidates' probabilities of several checkpoints (other
+//   seeds of one fold) averaged, against each checkpoint alone;
+// - smoothing: each vertex's weights averaged with its mesh neighbours' 0-8
+//   times before the top 4 are kept; sharpening: its candidates'
+//   probabilities raised to a power (1.5, 2, 3) and renormalised.
+// Each variant's post-processing (smoothing x heat blend x min weight, gat
+// calibrate's grid) is chosen on the dataset's validation characters, then
+// the test characters are scored with gat eval's metric (L1, dominant bone).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "gatcore/character/data/training_data.hpp"
+#include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/eval/weight_eval.hpp"
+#include "gatcore/character/features/bone_candidates.hpp"
+#include "gatcore/character/rig/blend_weights.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
+#include "gatcore/graph.hpp"
+#include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/model.hpp"
+#include "gatcore/models/sample.hpp"
+#include "gatcore/models/predict.hpp"
+
+using namespace gatcore;
+using namespace gatcore::character;
+
+static Tensor probs(models::LoadedModel& l, const PreparedCharacter& pc, const BoneCandidates& c) {
+  const models::ModelConfig& cfg = l.model->config();
+  models::Sample s;
+  s.name = pc.character.name;
+  s.features = c.features;
+  if (cfg.logit_prior) s.prior = bone_heat_log_prior(c);
+  s.graph = share(CsrGraph(pc.mesh_graph));
+  s.bone_mask = Tensor::zeros(1, cfg.out_dim);
+  for (int i = 0; i < c.valid; ++i) s.bone_mask.at(0, i) = 1.0f;
+  return models::predict(*l.model, s, l.norm, 0);
+}
+
+// Each vertex's weights averaged with its mesh neighbours' `iters` times
+// (half its own, half the neighbourhood mean), then its top 4 renormalised.
+static SkinWeights smooth(const SkinWeights& w, const CsrGraph& g, std::int32_t J, int iters) {
+  if (iters == 0) return w;
+  std::vector<float> d = w.dense(J), t(d.size());
+  const std::int64_t n = w.num_vertices();
+  for (int it = 0; it < iters; ++it) {
+    for (std::int64_t v = 0; v < n; ++v) {
+      const std::int64_t b = g.indptr[v], e = g.indptr[v + 1];
+      for (std::int32_t j = 0; j < J; ++j) {
+        double m = 0;
+        for (std::int64_t k = b; k < e; ++k) m += d[std::size_t(g.indices[k]) * J + j];
+        t[std::size_t(v) * J + j] = float(0.5 * d[std::size_t(v) * J + j] + 0.5 * m / double(e - b));
+      }
+    }
+    std::swap(d, t);
+  }
+  SkinWeights out;
+  out.ptr.assign(1, 0);
+  for (std::int64_t v = 0; v < n; ++v) {
+    std::vector<std::pair<float, std::int32_t>> row;
+    for (std::int32_t j = 0; j < J; ++j)
+      if (d[std::size_t(v) * J + j] > 0) row.push_back({d[std::size_t(v) * J + j], j});
+    std::sort(row.begin(), row.end(), [](auto& a, auto& b) { return a.first > b.first; });
+    if (row.size() > 4) row.resize(4);
+    double sum = 0;
+    for (auto& r : row) sum += r.first;
+    for (auto& r : row) out.joint.push_back(r.second), out.weight.push_back(float(r.first / sum));
+    out.ptr.push_back(std::int64_t(out.joint.size()));
+  }
+  return out;
+}
+
+int main(int argc, char** argv) {
+  if (argc < 3) { std::fprintf(stderr, "usage: %s dataset.json model.gcm...\n", argv[0]); return 2; }
+  const TrainingData td = load_training_data(argv[1]);
+  std::vector<models::LoadedModel> ms;
+  for (int i = 2; i < argc; ++i) { ms.push_back(models::load_checkpoint(argv[i])); ms.back().model->fold_batch_norm(); }
+  const int M = int(ms.size()), k = int(ms[0].model->config().out_dim);
+  const std::int32_t B = td.super.num_bones();
+  const std::vector<float> mins{0.0f, 0.01f, 0.02f, 0.03f, 0.05f, 0.075f, 0.1f, 0.15f, 0.2f};
+  const std::vector<float> blends{0.0f, 0.1f, 0.2f, 0.3f, 0.5f};
+  // > 0: smoothing iterations; < 0: sharpening, each vertex's candidate
+  // probabilities raised to the power -s/2 (1.5, 2, 3) and renormalised.
+  const std::vector<int> smooths{0, 1, 2, 4, 8, -3, -4, -6};
+  const std::size_t G = smooths.size() * blends.size() * mins.size();
+  // variants: each single model, then the ensemble
+  auto run_part = [&](DatasetPart part, std::vector<std::vector<double>>& l1, std::vector<std::vector<double>>& dom,
+                      bool per_char) {
+    const auto& chars = td.part(part);
+    l1.assign(M + 1, std::vector<double>(G, 0.0));
+    dom = l1;
+    for (const std::int32_t ci : chars) {
+      const PreparedCharacter& pc = td.characters[std::size_t(ci)];
+      const auto& j2b = td.super.joint_to_bone[std::size_t(ci)];
+      const auto& mask = td.super.mask[std::size_t(ci)];
+      const BoneCandidates c = bone_candidate_features(pc, k);
+      std::vector<Tensor> ys;
+      for (auto& m : ms) ys.push_back(probs(m, pc, c));
+      Tensor avg = ys[0].clone();
+      for (int m = 1; m < M; ++m)
+        for (std::int64_t i = 0; i < avg.rows(); ++i)
+          for (std::int64_t j = 0; j < avg.cols(); ++j) avg.at(i, j) += ys[m].at(i, j);
+      for (std::int64_t i = 0; i < avg.rows(); ++i)
+        for (std::int64_t j = 0; j < avg.cols(); ++j) avg.at(i, j) /= float(M);
+      ys.push_back(avg);
+      BoneHeatParams bp;
+      const SkinWeights heat = bone_heat_weights(pc.character, bp);
+      const std::vector<float> truth = super_weights(pc.character.mesh.weights, j2b, B);
+      WeightEvalOptions eo;
+      eo.poses = 0;
+      for (int v = 0; v <= M; ++v) {
+        const SkinWeights full = weights_from_candidates(c, ys[v]);
+        for (std::size_t si = 0; si < smooths.size(); ++si) {
+          SkinWeights top;
+          if (smooths[si] > 0) {
+            top = smooth(full, pc.mesh_graph, pc.character.skeleton.num_joints(), smooths[si]);
+          } else {
+            Tensor y = ys[v].clone();
+            if (smooths[si] < 0) {
+              const float g = -0.5f * float(smooths[si]);
+              for (std::int64_t i = 0; i < y.rows(); ++i) {
+                double sum = 0;
+                for (std::int64_t j = 0; j < y.cols(); ++j) sum += y.at(i, j) = std::pow(y.at(i, j), g);
+                if (sum > 0)
+                  for (std::int64_t j = 0; j < y.cols(); ++j) y.at(i, j) = float(y.at(i, j) / sum);
+              }
+            }
+            top = weights_from_candidates(c, models::top_k_renormalise(y, 4));
+          }
+          for (std::size_t h = 0; h < blends.size(); ++h) {
+            const SkinWeights mixed = blends[h] > 0 ? blend_weights(top, heat, blends[h], 4) : top;
+            const std::vector<float> pred = super_weights(mixed, j2b, B);
+            for (std::size_t mi = 0; mi < mins.size(); ++mi) {
+              eo.min_weight = mins[mi];
+              const auto r = evaluate_character_weights(pc, pred, truth, B, j2b, mask, eo, ci);
+              const std::size_t gi = (si * blends.size() + h) * mins.size() + mi;
+              l1[v][gi] += r.weights.l1_mean / double(chars.size());
+              dom[v][gi] += r.dominant / double(chars.size());
+            }
+          }
+        }
+      }
+      if (per_char) std::fprintf(stderr, ".");
+    }
+  };
+  std::vector<std::vector<double>> vl1, vdom, tl1, tdom;
+  run_part(DatasetPart::validation, vl1, vdom, false);
+  run_part(DatasetPart::test, tl1, tdom, true);
+  std::fprintf(stderr, "\n");
+  for (int v = 0; v <= M; ++v) {
+    std::size_t best = 0;
+    for (std::size_t g = 0; g < vl1[v].size(); ++g) if (vl1[v][g] < vl1[v][best]) best = g;
+    // The best without smoothing too (the grid's first block).
+    std::size_t best0 = 0;
+    for (std::size_t g = 0; g < blends.size() * mins.size(); ++g) if (vl1[v][g] < vl1[v][best0]) best0 = g;
+    const std::size_t bm = best % (blends.size() * mins.size());
+    std::printf("%s: val L1 %.4f (smooth %d blend %.2g min %.3g) test L1 %.4f dominant %.3f | unsmoothed: val %.4f "
+                "test %.4f dom %.3f | raw test L1 %.4f dom %.3f\n",
+                v < M ? argv[2 + v] : "ensemble", vl1[v][best], smooths[best / (blends.size() * mins.size())],
+                double(blends[bm / mins.size()]), double(mins[bm % mins.size()]), tl1[v][best], tdom[v][best],
+                vl1[v][best0], tl1[v][best0], tdom[v][best0], tl1[v][0], tdom[v][0]);
+    // Test L1 per smoothing at the unsmoothed choice of blend and min weight.
+    std::printf("   test L1 by smoothing (blend/min fixed):");
+    for (std::size_t si = 0; si < smooths.size(); ++si)
+      std::printf(" %d:%.4f/%.3f", smooths[si], tl1[v][si * blends.size() * mins.size() + best0],
+                  tdom[v][si * blends.size() * mins.size() + best0]);
+    std::printf("\n   val L1 by smoothing:");
+    for (std::size_t si = 0; si < smooths.size(); ++si)
+      std::printf(" %d:%.4f", smooths[si], vl1[v][si * blends.size() * mins.size() + best0]);
+    std::printf("\n");
+  }
+  return 0;
+}
