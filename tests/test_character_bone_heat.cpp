@@ -52,6 +52,7 @@ TEST_CASE("bone heat on a two-bone tube follows the analytic exponential falloff
   p.heat = 1.0f;
   p.max_influences = 2;
   p.min_weight = 0.0f;
+  p.cut_below = 0.0f;  // the solved heat itself
   const SkinWeights w = bone_heat_weights(ch, p);
   check_partition(w, ch.mesh.num_vertices(), 2);
   double max_err = 0;
@@ -263,6 +264,77 @@ TEST_CASE("a leaf bone ends at a joint outside its chain on its axis (an IK foot
   add_joint(off.skeleton, "Side", 0, {0.5f, 1.6f, 0.0f});
   add_joint(off.skeleton, "Far", 0, {0.0f, 2.6f, 0.0f});
   CHECK(bone_segments(off.skeleton)[1][0].b[1] == Approx(1.5f));
+}
+
+TEST_CASE("a limb's last bone reaches an IK target off the root up to 3 parent lengths away (a long stylised shin)",
+          "[bone_heat]") {
+  // root at y = 0, bone1 (the thigh) at y = 1, Shin (a leaf) at y = 1.4: its
+  // parent is 0.4 long, and an IK foot off the root at y = 2.4 is 2.5 parent
+  // lengths down the shin's axis, where the shin ends.
+  Character ch = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  add_joint(ch.skeleton, "Shin", 1, {0.0f, 1.4f, 0.0f});
+  REQUIRE(bone_segments(ch.skeleton)[2][0].b[1] == Approx(1.6f));  // no target: half the parent's length
+  Character ik = ch;
+  add_joint(ik.skeleton, "FootIK", 0, {0.0f, 2.4f, 0.0f});
+  CHECK(bone_segments(ik.skeleton)[2][0].b[1] == Approx(2.4f));
+  // A root of its own (an IK control outside the hierarchy) marks it too.
+  Character rooted = ch;
+  add_joint(rooted.skeleton, "FootIK", -1, {0.0f, 2.4f, 0.0f});
+  CHECK(bone_segments(rooted.skeleton)[2][0].b[1] == Approx(2.4f));
+  // A joint deeper in another chain (a fin's axis crossing the spine) does not.
+  Character deep = ch;
+  add_joint(deep.skeleton, "Side", 0, {1.0f, 0.0f, 0.0f});
+  add_joint(deep.skeleton, "Deep", 3, {0.0f, 2.4f, 0.0f});
+  CHECK(bone_segments(deep.skeleton)[2][0].b[1] == Approx(1.6f));
+  // Past 3 parent lengths: no tail.
+  Character far = ch;
+  add_joint(far.skeleton, "FootIK", 0, {0.0f, 2.65f, 0.0f});
+  CHECK(bone_segments(far.skeleton)[2][0].b[1] == Approx(1.6f));
+  // A root's own leaf (an IK foot pointing at a pole target) keeps 1.5
+  // parent lengths: the test above.
+}
+
+TEST_CASE("bone heat's weight limit drops a far bone's faint heat and ramps the next (Blender's)", "[bone_heat]") {
+  // Three joints along a tube: every vertex gets heat from all of them, the
+  // far ones faint. The limited weights are the solved heat through
+  // Blender's heat_limit_weight (in double here), renormalised.
+  Character ch = charfix::tube_character(41, 16, 2.0f, 0.25f, 0.0f);
+  add_joint(ch.skeleton, "Tip", 1, {0.0f, 1.6f, 0.0f});
+  BoneHeatParams raw_p;
+  raw_p.max_influences = 64;
+  raw_p.min_weight = 0.0f;
+  raw_p.cut_below = 0.0f;
+  BoneHeatParams lim_p = raw_p;
+  lim_p.cut_below = 0.025f;
+  lim_p.ramp_until = 0.05f;
+  const SkinWeights raw = bone_heat_weights(ch, raw_p), lim = bone_heat_weights(ch, lim_p);
+  check_partition(lim, ch.mesh.num_vertices(), 3);
+  int cut = 0, ramped = 0;
+  double max_err = 0;
+  for (std::int64_t v = 0; v < ch.mesh.num_vertices(); ++v) {
+    double w[3], sum = 0;
+    for (std::int32_t j = 0; j < 3; ++j) {
+      const double x = weight_of(raw, v, j);
+      w[j] = x < 0.025 ? 0.0 : x < 0.05 ? (x - 0.025) / 0.025 * 0.05 : x;
+      cut += x > 0 && x < 0.025;
+      ramped += x >= 0.025 && x < 0.05;
+      sum += w[j];
+    }
+    for (std::int32_t j = 0; j < 3; ++j) max_err = std::max(max_err, std::abs(w[j] / sum - weight_of(lim, v, j)));
+  }
+  INFO(cut << " weights cut, " << ramped << " ramped, max |limited - reference| " << max_err);
+  CHECK(cut > 0);
+  CHECK(ramped > 0);
+  CHECK(max_err < 1e-5);
+  // The default is Blender's limit.
+  CHECK(BoneHeatParams{}.cut_below == 0.025f);
+  CHECK(BoneHeatParams{}.ramp_until == 0.05f);
+  // Bad limits are refused by name.
+  for (const auto& [c, r] : {std::pair{-0.1f, 0.05f}, std::pair{0.05f, 0.025f}, std::pair{std::nanf(""), 0.05f}}) {
+    BoneHeatParams bad;
+    bad.cut_below = c, bad.ramp_until = r;
+    CHECK_THROWS_WITH(bone_heat_weights(ch, bad), Catch::Matchers::Contains("cut_below"));
+  }
 }
 
 TEST_CASE("bone heat's joint overrides: the user's word over the control rules", "[bone_heat]") {

@@ -392,6 +392,7 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
     BoneHeatParams hp;
     hp.max_influences = 64;
     hp.min_weight = 0.0f;
+    hp.cut_below = 0.0f;
     const SkinWeights heat = bone_heat_weights(pc.character, hp);
     const std::int64_t n = pc.character.mesh.num_vertices();
     REQUIRE(y.rows() == n);

@@ -275,7 +275,7 @@ int main(int argc, char** argv) {
       save_gltf_character(procedural_character(po), a[3]);
       return 0;
     }
-    // Bone heat's settings, for experiments: --heat C, --no-visibility.
+    // Bone heat's settings, for experiments: --heat C, --no-visibility, ...
     BoneHeatParams bp;
     int confusions = 0;  // --confusions N: each method's N largest dominant-bone confusions
     std::vector<std::string> rest;
@@ -284,13 +284,14 @@ int main(int argc, char** argv) {
       else if (a[i] == "--no-visibility") bp.visibility = false;
       else if (a[i] == "--nearest-visible") bp.nearest_only = false;
       else if (a[i] == "--no-facing") bp.facing_distance = false;
+      else if (a[i] == "--no-weight-limit") bp.cut_below = 0.0f;
       else if (a[i] == "--confusions" && i + 1 < a.size()) confusions = std::stoi(a[++i]);
       else rest.push_back(a[i]);
     }
     if (rest.size() == 2) return run(rest[0], rest[1], "", bp, confusions);
     if (rest.size() == 4 && rest[2] == "--json") return run(rest[0], rest[1], rest[3], bp, confusions);
     std::fprintf(stderr,
-                 "usage: bone_heat_peer CHARACTER.glb BLENDER.json [--json OUT.json] [--heat C] [--no-visibility] [--nearest-visible] [--no-facing] [--confusions N]\n"
+                 "usage: bone_heat_peer CHARACTER.glb BLENDER.json [--json OUT.json] [--heat C] [--no-visibility] [--nearest-visible] [--no-facing] [--no-weight-limit] [--confusions N]\n"
                  "       bone_heat_peer --procedural humanoid|creature SEED OUT.glb\n");
     return 2;
   } catch (const std::exception& e) {

@@ -199,15 +199,25 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
       // glTF keeps no bone tails. Where a joint outside this chain sits on
       // the leaf's own axis within 1.5 parent lengths, it marks the tail: an
       // IK foot target hanging off the root where the shin ends.
+      // Stylised legs have shins up to 3 thigh lengths long (a 1.6x shin
+      // ending at an IK foot off the root, left at half a thigh, hands the
+      // lower shin to the foot), so a limb's last bone (a leaf that is no
+      // root's child) reaches up to 3 parent lengths, to a joint where IK
+      // targets hang: a root or a root's child. A joint deeper in another
+      // chain (a fin's axis crossing the spine) is no tail, and a root's own
+      // leaf (an IK foot pointing at a pole target) keeps 1.5.
       std::int32_t at = -1;
-      double at_len = 1.5 * plen;
+      double at_len = 3.0 * plen;
+      const bool limb_end = s.parents[p] >= 0;
       std::fill(chain.begin(), chain.end(), 0);
       for (std::int32_t a = j; a >= 0; a = s.parents[a]) chain[a] = 1;
       for (std::int32_t k = 0; k < nj; ++k) {
         if (chain[k]) continue;
         const V3 v = sub(to_double(head[k]), to_double(head[j]));
         const double l = length(v);
-        if (l > 0 && l <= at_len && dot(v, d) >= 0.9 * l) at = k, at_len = l;
+        if (!(l > 0 && l <= at_len && dot(v, d) >= 0.9 * l)) continue;
+        const bool ik_target = s.parents[k] < 0 || s.parents[s.parents[k]] < 0;
+        if (l <= 1.5 * plen || (limb_end && ik_target)) at = k, at_len = l;
       }
       if (at >= 0) {
         tail = head[at];
@@ -230,6 +240,10 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   GATCORE_CHECK(n > 0, ch.name, ": bone heat needs a mesh with vertices");
   GATCORE_CHECK(std::isfinite(params.heat) && params.heat > 0, ch.name, ": bone heat constant must be > 0, got ",
                 params.heat);
+  GATCORE_CHECK(std::isfinite(params.cut_below) && std::isfinite(params.ramp_until) && params.cut_below >= 0 &&
+                    params.ramp_until >= params.cut_below,
+                ch.name, ": bone heat weight limit needs 0 <= cut_below <= ramp_until, got cut_below ",
+                params.cut_below, ", ramp_until ", params.ramp_until);
   GATCORE_CHECK(params.deforming.empty() || static_cast<std::int32_t>(params.deforming.size()) == nj, ch.name,
                 ": bone heat deforming mask has ", params.deforming.size(), " entries for ", nj, " joints");
   GATCORE_CHECK(params.joint_override.empty() || static_cast<std::int32_t>(params.joint_override.size()) == nj,
@@ -525,18 +539,31 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   const Eigen::MatrixXd W = ldlt.solve(rhs);
   GATCORE_CHECK(ldlt.info() == Eigen::Success && W.allFinite(), ch.name, ": bone heat: the heat solve failed");
 
+  const double cut = params.cut_below, ramp = params.ramp_until;
+  auto limited = [&](double w) {
+    if (cut <= 0) return w;
+    if (w < cut) return 0.0;
+    if (w < ramp) return (w - cut) / (ramp - cut) * ramp;
+    return w;
+  };
   SkinWeights raw;
   for (std::int64_t v = 0; v < n; ++v) {
     const std::int32_t u = weld[v];
     double best = 0;
-    for (std::int32_t j = 0; j < nj; ++j) best = std::max(best, W(u, j));
+    std::int32_t best_j = -1;
     for (std::int32_t j = 0; j < nj; ++j)
-      if (W(u, j) > 1e-9 * best && W(u, j) > 0) {
+      if (W(u, j) > best) best = W(u, j), best_j = j;
+    for (std::int32_t j = 0; j < nj; ++j) {
+      const double w = limited(W(u, j));
+      if (w > 1e-9 * best && w > 0) {
         raw.joint.push_back(j);
-        raw.weight.push_back(static_cast<float>(W(u, j)));
+        raw.weight.push_back(static_cast<float>(w));
       }
-    if (raw.joint.size() == static_cast<std::size_t>(raw.ptr.back())) {  // nothing positive: nearest bone
-      raw.joint.push_back(target_any[u].front().first);
+    }
+    if (raw.joint.size() == static_cast<std::size_t>(raw.ptr.back())) {
+      // Nothing left: the largest heat (every weight under the cut: a vertex
+      // far from all bones), else the nearest bone (nothing positive).
+      raw.joint.push_back(best_j >= 0 ? best_j : target_any[u].front().first);
       raw.weight.push_back(1.0f);
     }
     raw.ptr.push_back(static_cast<std::int64_t>(raw.joint.size()));

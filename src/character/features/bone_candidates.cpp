@@ -45,6 +45,7 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
   BoneHeatParams hp;
   hp.max_influences = 64;
   hp.min_weight = 0.0f;
+  hp.cut_below = 0.0f;
   const SkinWeights heat = bone_heat_weights(ch, hp);
   std::vector<float> heat_row(static_cast<std::size_t>(nj), 0.0f);
   struct Near {

@@ -59,6 +59,13 @@ struct BoneHeatParams {
   // (Blender's automatic weights): the bone the surface faces away from is
   // nearer than one it faces. Needs outward normals (consistent winding).
   bool facing_distance = true;
+  // Blender's limit on the solved heat (heat_limit_weight): a joint's weight
+  // under cut_below is dropped and one from cut_below to ramp_until scaled
+  // linearly from 0 up to ramp_until, so a far bone's faint diffusion tail is
+  // no influence (artists paint none). cut_below = 0: the solved heat as is
+  // (skinweights-any's prior reads it so). 0 <= cut_below <= ramp_until.
+  float cut_below = 0.025f;
+  float ramp_until = 0.05f;
   int max_influences = 4;   // kept per vertex (largest), renormalised
   float min_weight = 0.01f; // influences below this fraction of the vertex's total dropped
   // A child whose direction from the joint makes a cosine below this with the
