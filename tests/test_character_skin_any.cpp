@@ -9,6 +9,8 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "character_fixtures.hpp"
 #include "pose_fixtures.hpp"
@@ -65,6 +67,22 @@ void randomise_last_layer(models::Model& m, std::uint32_t seed) {
       for (std::int64_t j = 0; j < x.cols(); ++j) x.at(i, j) = U(rng);
   }
   REQUIRE(found == 2);  // W and b
+}
+
+// The training KL on `train` before and after `epochs` whole-mesh epochs of
+// `batch` characters at a rate of 3e-3.
+std::pair<double, double> kl_before_after(models::Model& m, const models::Normaliser& norm,
+                                          const std::vector<models::Sample>& train, int batch, int epochs) {
+  models::TrainOptions opt = models::TrainOptions::defaults_for(m.config());
+  opt.batch_size = batch;
+  // Whole meshes: a random subset's induced graph has few edges and its max
+  // pool is not the whole mesh's, so evaluation (whole meshes) would lag.
+  opt.sampling = models::Sampling::full;
+  opt.lr = 3e-3f;
+  models::Trainer t(m, opt, norm);
+  const double before = t.evaluate(train);
+  for (int e = 0; e < epochs; ++e) t.run_epoch(train);
+  return {before, t.evaluate(train)};
 }
 
 }  // namespace
@@ -133,16 +151,8 @@ TEST_CASE("skinweights-any trains on characters with different bone counts in on
   auto model = models::make_model(cfg, 3);
   REQUIRE(model->pool_sizes().empty());
   const models::Normaliser norm = models::Normaliser::fit(train, false);
-  models::TrainOptions opt = models::TrainOptions::defaults_for(cfg);
-  opt.batch_size = 2;  // both characters in one batch: per-character candidate masks, one softmax width
-  // Whole meshes: a random subset's induced graph has few edges and its max
-  // pool is not the whole mesh's, so evaluation (whole meshes) would lag.
-  opt.sampling = models::Sampling::full;
-  opt.lr = 3e-3f;
-  models::Trainer t(*model, opt, norm);
-  const double before = t.evaluate(train);
-  for (int e = 0; e < 60; ++e) t.run_epoch(train);
-  const double after = t.evaluate(train);
+  // Both characters in one batch: per-character candidate masks, one softmax width.
+  const auto [before, after] = kl_before_after(*model, norm, train, 2, 60);
   INFO("KL before " << before << ", after " << after);
   CHECK(std::isfinite(after));
   CHECK(after < 0.6 * before);
@@ -465,14 +475,7 @@ TEST_CASE("the classifier's dropout acts while training only, and is recorded in
     CHECK_THROWS_WITH(models::make_model(dropped, 5), Catch::Contains("classifier_dropout must be in [0, 1)"));
   }
   // It still learns: the dropped model's KL on its character falls as the plain one's does.
-  models::TrainOptions opt = models::TrainOptions::defaults_for(plain);
-  opt.batch_size = 1;
-  opt.sampling = models::Sampling::full;
-  opt.lr = 3e-3f;
-  models::Trainer t(*d, opt, norm);
-  const double before = t.evaluate(train);
-  for (int e = 0; e < 40; ++e) t.run_epoch(train);
-  const double after = t.evaluate(train);
+  const auto [before, after] = kl_before_after(*d, norm, train, 1, 40);
   INFO("KL before " << before << ", after " << after);
   CHECK(after < 0.7 * before);
 }
