@@ -3,6 +3,7 @@
 // model configuration and training state). Bad files exit non-zero with the
 // reason.
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cctype>
 #include <cstdio>
@@ -200,8 +201,11 @@ void print_model(const std::string& path) {
     if (b > a) std::printf("  %s\n", cfg.substr(a, b - a).c_str());
     a = b + 1;
   }
-  std::printf("trained    %d epochs, lr %s, %lld Adam steps%s\n", progress.epoch,
-              progress.lr < 0 ? "-" : models::metadata_text(progress.lr).c_str(),
+  // The rate as the float the optimiser holds, shortest form (the metadata
+  // keeps its double's 17 digits for an exact resume: 0.0010000000474974513).
+  char lr_text[32] = "-";
+  if (progress.lr >= 0) *std::to_chars(lr_text, lr_text + sizeof lr_text - 1, float(progress.lr)).ptr = '\0';
+  std::printf("trained    %d epochs, lr %s, %lld Adam steps%s\n", progress.epoch, lr_text,
               static_cast<long long>(progress.adam_steps),
               progress.resumable ? " (resumable: optimiser state saved)" : "");
   if (progress.average_decay > 0)
