@@ -15,11 +15,14 @@
 #include <string>
 #include <vector>
 
+#include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/eval/weight_calibration.hpp"
 #include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
 #include "gatcore/character/rig/blend_weights.hpp"
+#include "gatcore/character/rig/limit_weights.hpp"
 #include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/graph.hpp"
 #include "gatcore/models/checkpoint.hpp"
@@ -30,15 +33,12 @@
 using namespace gatcore;
 using namespace gatcore::character;
 
-static Tensor probs(models::LoadedModel& l, const PreparedCharacter& pc, const BoneCandidates& c) {
-  const models::ModelConfig& cfg = l.model->config();
-  models::Sample s;
-  s.name = pc.character.name;
-  s.features = c.features;
-  if (cfg.logit_prior) s.prior = bone_heat_log_prior(c);
-  s.graph = share(CsrGraph(pc.mesh_graph));
-  s.bone_mask = Tensor::zeros(1, cfg.out_dim);
-  for (int i = 0; i < c.valid; ++i) s.bone_mask.at(0, i) = 1.0f;
+// The candidates' probabilities of one checkpoint, on the character's
+// sample (bone_candidate_sample), without the prior where the model takes none.
+static Tensor probs(models::LoadedModel& l, const models::Sample& sample) {
+  if (l.model->config().logit_prior) return models::predict(*l.model, sample, l.norm, 0);
+  models::Sample s = sample;
+  s.prior = Tensor{};
   return models::predict(*l.model, s, l.norm, 0);
 }
 
@@ -62,17 +62,11 @@ static SkinWeights smooth(const SkinWeights& w, const CsrGraph& g, std::int32_t 
   SkinWeights out;
   out.ptr.assign(1, 0);
   for (std::int64_t v = 0; v < n; ++v) {
-    std::vector<std::pair<float, std::int32_t>> row;
     for (std::int32_t j = 0; j < J; ++j)
-      if (d[std::size_t(v) * J + j] > 0) row.push_back({d[std::size_t(v) * J + j], j});
-    std::sort(row.begin(), row.end(), [](auto& a, auto& b) { return a.first > b.first; });
-    if (row.size() > 4) row.resize(4);
-    double sum = 0;
-    for (auto& r : row) sum += r.first;
-    for (auto& r : row) out.joint.push_back(r.second), out.weight.push_back(float(r.first / sum));
+      if (d[std::size_t(v) * J + j] > 0) out.joint.push_back(j), out.weight.push_back(d[std::size_t(v) * J + j]);
     out.ptr.push_back(std::int64_t(out.joint.size()));
   }
-  return out;
+  return limit_weights(out, 4);
 }
 
 int main(int argc, char** argv) {
@@ -82,8 +76,8 @@ int main(int argc, char** argv) {
   for (int i = 2; i < argc; ++i) { ms.push_back(models::load_checkpoint(argv[i])); ms.back().model->fold_batch_norm(); }
   const int M = int(ms.size()), k = int(ms[0].model->config().out_dim);
   const std::int32_t B = td.super.num_bones();
-  const std::vector<float> mins{0.0f, 0.01f, 0.02f, 0.03f, 0.05f, 0.075f, 0.1f, 0.15f, 0.2f};
-  const std::vector<float> blends{0.0f, 0.1f, 0.2f, 0.3f, 0.5f};
+  const CalibrationGrid grid;  // gat calibrate's
+  const std::vector<float>&mins = grid.min_weights, &blends = grid.heat_blends;
   // > 0: smoothing iterations; < 0: sharpening, each vertex's candidate
   // probabilities raised to the power -s/2 (1.5, 2, 3) and renormalised.
   const std::vector<int> smooths{0, 1, 2, 4, 8, -3, -4, -6};
@@ -98,9 +92,10 @@ int main(int argc, char** argv) {
       const PreparedCharacter& pc = td.characters[std::size_t(ci)];
       const auto& j2b = td.super.joint_to_bone[std::size_t(ci)];
       const auto& mask = td.super.mask[std::size_t(ci)];
-      const BoneCandidates c = bone_candidate_features(pc, k);
+      BoneCandidates c;
+      const models::Sample sample = bone_candidate_sample(pc, k, &c);
       std::vector<Tensor> ys;
-      for (auto& m : ms) ys.push_back(probs(m, pc, c));
+      for (auto& m : ms) ys.push_back(probs(m, sample));
       Tensor avg = ys[0].clone();
       for (int m = 1; m < M; ++m)
         for (std::int64_t i = 0; i < avg.rows(); ++i)
