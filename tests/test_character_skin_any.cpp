@@ -40,6 +40,10 @@ PreparedCharacter procedural(ProceduralKind kind, std::uint32_t seed) {
   return prepare_character(procedural_character(o), DeltaMushParams{0, 0.5f});
 }
 
+// The bone heat new skinweights-any models read (ModelConfig::defaults; a
+// test below checks they do).
+constexpr HeatPrior kPrior = HeatPrior::weight_limited;
+
 // A skinweights-any small enough for tests to run in milliseconds.
 models::ModelConfig small_any_config(int k) {
   models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
@@ -89,7 +93,7 @@ std::pair<double, double> kl_before_after(models::Model& m, const models::Normal
 
 TEST_CASE("bone candidates of a two-bone tube: nearest first, padded past the joint count", "[skin_any]") {
   const PreparedCharacter pc = prepare_character(charfix::tube_character(12, 8, 2.0f, 0.25f, 0.0f));
-  const BoneCandidates c = bone_candidate_features(pc, 4);
+  const BoneCandidates c = bone_candidate_features(pc, 4, HeatPrior::weight_limited);
   const std::int64_t n = pc.character.mesh.num_vertices();
   REQUIRE(c.k == 4);
   REQUIRE(c.valid == 2);
@@ -122,7 +126,7 @@ TEST_CASE("bone candidates of a two-bone tube: nearest first, padded past the jo
     for (int k = 0; k < 4; ++k) sum += t.at(v, k);
     CHECK(sum == Approx(1.0));
   }
-  CHECK_THROWS_AS(bone_candidate_features(pc, 0), InvalidArgument);
+  CHECK_THROWS_AS(bone_candidate_features(pc, 0, HeatPrior::weight_limited), InvalidArgument);
 }
 
 TEST_CASE("skinweights-any trains on characters with different bone counts in one batch", "[skin_any]") {
@@ -132,7 +136,7 @@ TEST_CASE("skinweights-any trains on characters with different bone counts in on
   const PreparedCharacter b = prepare_character(charfix::tube_character(12, 8, 2.0f, 0.25f, 0.3f));
   REQUIRE(a.character.skeleton.num_joints() != b.character.skeleton.num_joints());
   const int k = 4;
-  std::vector<models::Sample> train{bone_candidate_sample(a, k), bone_candidate_sample(b, k)};
+  std::vector<models::Sample> train{bone_candidate_sample(a, k, kPrior), bone_candidate_sample(b, k, kPrior)};
   CHECK(train[1].bone_mask.at(0, 1) == 1.0f);
   CHECK(train[1].bone_mask.at(0, 2) == 0.0f);
   // Both scorers: the classifier's column per slot, and one MLP shared by
@@ -185,7 +189,7 @@ TEST_CASE("finite-difference gradients through a reduced skinweights-any, two bo
   for (float& x : tube.mesh.positions) x += jitter(rng);
   const PreparedCharacter b = prepare_character(tube);
   const int k = 4;
-  std::vector<models::Sample> data{bone_candidate_sample(a, k), bone_candidate_sample(b, k)};
+  std::vector<models::Sample> data{bone_candidate_sample(a, k, kPrior), bone_candidate_sample(b, k, kPrior)};
   models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
   cfg.stage1 = {8};
   cfg.gc_heads = {2, 1};
@@ -230,7 +234,7 @@ TEST_CASE("skinweights-any predicts the same weights whatever the joints are cal
   auto model = models::make_model(cfg, 5);
   randomise_last_layer(*model, 6);  // not just bone heat: the network's own scores too
   const PreparedCharacter pc = prepare_character(original, DeltaMushParams{0, 0.5f});
-  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k)}, false);
+  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k, kPrior)}, false);
   const WeightPrediction p = predict_skin_weights_any(*model, norm, original, 3);
   const WeightPrediction q = predict_skin_weights_any(*model, norm, renamed, 3);
   REQUIRE(p.weights.num_vertices() == original.mesh.num_vertices());
@@ -305,7 +309,7 @@ TEST_CASE("skinweights-any and bone heat give the same weights in centimetres an
   auto model = models::make_model(cfg, 5);
   randomise_last_layer(*model, 8);
   const PreparedCharacter pc = prepare_character(metres, DeltaMushParams{0, 0.5f});
-  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k)}, false);
+  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k, kPrior)}, false);
   SECTION("skinweights-any") {
     const WeightPrediction p = predict_skin_weights_any(*model, norm, metres, 3);
     const WeightPrediction q = predict_skin_weights_any(*model, norm, cm, 3);
@@ -340,7 +344,7 @@ TEST_CASE("skinweights-any that ignores the world columns gives a turned charact
   const int k = 4;
   const PreparedCharacter pc = prepare_character(c, DeltaMushParams{0, 0.5f});
   const PreparedCharacter pt = prepare_character(turned, DeltaMushParams{0, 0.5f});
-  const models::Sample sc = bone_candidate_sample(pc, k), st = bone_candidate_sample(pt, k);
+  const models::Sample sc = bone_candidate_sample(pc, k, kPrior), st = bone_candidate_sample(pt, k, kPrior);
   // The fixture turned the character: the world columns moved, the pair columns did not.
   double world = 0, pair = 0;
   for (std::int64_t v = 0; v < sc.features.rows(); ++v)
@@ -383,26 +387,31 @@ TEST_CASE("skinweights-any that ignores the world columns gives a turned charact
 
 TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates", "[skin_any]") {
   // The log prior and the zero last layer: softmax(log(h + eps)) over the
-  // valid candidates, h bone heat's unpruned weight of the candidate joint
-  // (computed here from bone_heat_weights, not read back from the features).
+  // valid candidates, h bone heat's weight of the candidate joint, with or
+  // without Blender's weight limit as the config says (computed here from
+  // bone_heat_weights, not read back from the features).
   const bool shared = GENERATE(false, true);
+  const bool limited = GENERATE(false, true);
   for (const int k : {4, 8}) {
-    INFO("k " << k << ", pair scorer " << shared);
+    INFO("k " << k << ", pair scorer " << shared << ", weight limit " << limited);
     const PreparedCharacter pc = procedural(ProceduralKind::humanoid, 6);
-    BoneCandidates c;
-    const models::Sample s = bone_candidate_sample(pc, k, &c);
     models::ModelConfig cfg = small_any_config(k);
+    cfg.prior_weight_limit = limited;
     if (shared) {
       cfg.pair_scorer = {8};
       cfg.pair_features = kPairFeatures;
     }
+    BoneCandidates c;
+    const models::Sample s = bone_candidate_sample(pc, k, heat_prior(cfg), &c);
     auto model = models::make_model(cfg, 9);
     const models::Normaliser norm = models::Normaliser::fit({s}, false);
     const Tensor y = models::predict(*model, s, norm, 0);
+    // The inference path reads the prior from the model's config.
+    const SkinWeights own = predict_skin_weights_any(*model, norm, pc, k);
     BoneHeatParams hp;
     hp.max_influences = 64;
     hp.min_weight = 0.0f;
-    hp.cut_below = 0.0f;
+    if (!limited) hp.cut_below = 0.0f;
     const SkinWeights heat = bone_heat_weights(pc.character, hp);
     const std::int64_t n = pc.character.mesh.num_vertices();
     REQUIRE(y.rows() == n);
@@ -419,8 +428,13 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
       // eps floor is not small next to what is left: compare where it is.
       if (sum < 0.5) continue;
       ++compared;
-      for (int i = 0; i < c.valid; ++i)
+      for (int i = 0; i < c.valid; ++i) {
         CHECK(y.at(v, i) == Approx(h[std::size_t(i)] / sum).margin(2.0 * k * kBoneHeatPriorEps / sum + 1e-5));
+        float w = 0.0f;
+        for (std::int64_t e = own.ptr[v]; e < own.ptr[v + 1]; ++e)
+          if (own.joint[e] == c.joint[std::size_t(v * k + i)]) w = own.weight[e];
+        CHECK(w == Approx(h[std::size_t(i)] / sum).margin(2.0 * k * kBoneHeatPriorEps / sum + 1e-5));
+      }
     }
     // Bone heat's facing distance sends some skin (a chest under an arm) to
     // a bone behind it that is not among its nearest candidates: about 10 %
@@ -444,7 +458,7 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
 TEST_CASE("the classifier's dropout acts while training only, and is recorded in the configuration", "[skin_any]") {
   const PreparedCharacter a = procedural(ProceduralKind::humanoid, 1);
   const int k = 4;
-  const std::vector<models::Sample> train{bone_candidate_sample(a, k)};
+  const std::vector<models::Sample> train{bone_candidate_sample(a, k, kPrior)};
   const models::Normaliser norm = models::Normaliser::fit(train, false);
   models::ModelConfig plain = small_any_config(k);
   plain.classifier = {32, 16};
@@ -482,7 +496,7 @@ TEST_CASE("the classifier's dropout acts while training only, and is recorded in
 
 TEST_CASE("a batch takes every sample's log prior or none", "[skin_any]") {
   const PreparedCharacter a = procedural(ProceduralKind::humanoid, 1);
-  const models::Sample with = bone_candidate_sample(a, 4);
+  const models::Sample with = bone_candidate_sample(a, 4, kPrior);
   models::Sample without = with;
   without.prior = Tensor{};
   CHECK_THROWS_AS(models::make_batch({&with, &without}, {{}, {}}, {}, {}), InvalidArgument);
@@ -499,6 +513,15 @@ TEST_CASE("a batch takes every sample's log prior or none", "[skin_any]") {
   // Configurations round-trip the key; ones written before it read as off.
   CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
   CHECK_FALSE(models::ModelConfig::from_text("name = skinweights-any\n").logit_prior);
+  // New models read the weight-limited heat; a config from before the key
+  // reads the unlimited heat its model was trained on.
+  CHECK(cfg.prior_weight_limit);
+  CHECK(heat_prior(cfg) == kPrior);
+  CHECK(heat_prior(models::ModelConfig::from_text("name = skinweights-any\nlogit_prior = true\n")) ==
+        HeatPrior::unlimited);
+  cfg.prior_weight_limit = false;
+  CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
+  cfg.prior_weight_limit = true;
   cfg.pair_scorer = {8, 4};
   cfg.pair_features = kPairFeatures;
   CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
@@ -515,7 +538,7 @@ TEST_CASE("skinweights-any's validation L1 is gat eval's L1 over the character's
   const PreparedCharacter pc = procedural(ProceduralKind::humanoid, 3);
   const int k = 2;
   BoneCandidates c;
-  const models::Sample s = bone_candidate_sample(pc, k, &c);
+  const models::Sample s = bone_candidate_sample(pc, k, kPrior, &c);
   REQUIRE(s.target_mass.defined());
   int partial = 0, none = 0;
   for (std::int64_t v = 0; v < s.target_mass.rows(); ++v) {

@@ -75,6 +75,13 @@ int main(int argc, char** argv) {
   std::vector<models::LoadedModel> ms;
   for (int i = 2; i < argc; ++i) { ms.push_back(models::load_checkpoint(argv[i])); ms.back().model->fold_batch_norm(); }
   const int M = int(ms.size()), k = int(ms[0].model->config().out_dim);
+  // One sample per character serves every member: they must read the same features.
+  const HeatPrior prior = heat_prior(ms[0].model->config());
+  for (int i = 1; i < M; ++i)
+    if (ms[std::size_t(i)].model->config().out_dim != k || heat_prior(ms[std::size_t(i)].model->config()) != prior) {
+      std::fprintf(stderr, "%s: its candidates or bone-heat prior differ from %s's\n", argv[i + 2], argv[2]);
+      return 2;
+    }
   const std::int32_t B = td.super.num_bones();
   const CalibrationGrid grid;  // gat calibrate's
   const std::vector<float>&mins = grid.min_weights, &blends = grid.heat_blends;
@@ -93,7 +100,7 @@ int main(int argc, char** argv) {
       const auto& j2b = td.super.joint_to_bone[std::size_t(ci)];
       const auto& mask = td.super.mask[std::size_t(ci)];
       BoneCandidates c;
-      const models::Sample sample = bone_candidate_sample(pc, k, &c);
+      const models::Sample sample = bone_candidate_sample(pc, k, prior, &c);
       std::vector<Tensor> ys;
       for (auto& m : ms) ys.push_back(probs(m, sample));
       Tensor avg = ys[0].clone();

@@ -35,6 +35,7 @@ ModelConfig ModelConfig::defaults(const std::string& name, std::int64_t in_dim, 
     // untrained, the model is bone heat over the vertex's candidates.
     c.pool = false;
     c.logit_prior = true;
+    c.prior_weight_limit = true;
   }
   if (out_dim > 0) c.out_dim = out_dim;
   return c;
@@ -155,6 +156,7 @@ const std::vector<Field>& fields() {
       list_field("gc_pool", &ModelConfig::gc_pool),
       bool_field("pool", &ModelConfig::pool),
       bool_field("logit_prior", &ModelConfig::logit_prior),
+      bool_field("prior_weight_limit", &ModelConfig::prior_weight_limit),
       list_field("pair_scorer", &ModelConfig::pair_scorer),
       int_field("pair_features", &ModelConfig::pair_features),
       list_field("global_mlp", &ModelConfig::global_mlp),

@@ -192,6 +192,10 @@ void print_model(const std::string& path) {
                     ? "; the vertex's world-frame position and normal ignored (--world-columns ignore): the same "
                       "weights whichever way a character faces"
                     : "; reads the vertex's world-frame position and normal (--world-columns use)";
+  if (models::any_skeleton(c.kind()))
+    features += heat_prior(c) == HeatPrior::weight_limited
+                    ? "; bone heat prior with Blender's weight limit"
+                    : "; bone heat prior without a weight limit (a model from before the limit)";
   std::printf("features   %lld in, %lld out (%s)\n", static_cast<long long>(c.in_dim), static_cast<long long>(c.out_dim),
               features.c_str());
   std::printf("config\n");

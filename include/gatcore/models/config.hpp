@@ -53,6 +53,15 @@ struct ModelConfig {
   // training learns corrections to it. Configs written before the key
   // existed read as off.
   bool logit_prior = false;
+  // Whether that prior (and the bone-heat column of skinweights-any's
+  // features) is bone heat with Blender's weight limit (heat under 2.5 % of
+  // the vertex dropped, ramped up to 5 %; deform/bone_heat.hpp's
+  // BoneHeatParams) or bone heat unlimited. The limited heat is closer to
+  // artists' weights on every family measured (docs/results/
+  // bone-heat-vs-blender.md), so new skinweights-any models start from it;
+  // configs written before the key existed read as off (unlimited), so
+  // their features are what they were trained on.
+  bool prior_weight_limit = false;
   // A shared per-(vertex, output slot) scorer instead of the classifier's
   // last layer (skinweights-any; RigNet's design): the input's last
   // out_dim * pair_features columns are pair_features columns per slot

@@ -12,7 +12,11 @@ namespace gatcore::character {
 
 std::int64_t bone_candidate_feature_dim(int k) { return kVertexColumns + static_cast<std::int64_t>(k) * kPairFeatures; }
 
-BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
+HeatPrior heat_prior(const models::ModelConfig& cfg) {
+  return cfg.prior_weight_limit ? HeatPrior::weight_limited : HeatPrior::unlimited;
+}
+
+BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, HeatPrior prior) {
   const Character& ch = pc.character;
   const Skeleton& sk = ch.skeleton;
   const std::int32_t nj = sk.num_joints();
@@ -40,12 +44,12 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k) {
     max_depth = std::max(max_depth, depth[j]);
   }
   const auto children = sk.children();
-  // Bone heat's weights (no pruning) as a classical prior per candidate: the
-  // network learns the corrections to it.
+  // Bone heat's weights (not cut to a few influences) as a classical prior
+  // per candidate: the network learns the corrections to it.
   BoneHeatParams hp;
   hp.max_influences = 64;
   hp.min_weight = 0.0f;
-  hp.cut_below = 0.0f;
+  if (prior == HeatPrior::unlimited) hp.cut_below = 0.0f;
   const SkinWeights heat = bone_heat_weights(ch, hp);
   std::vector<float> heat_row(static_cast<std::size_t>(nj), 0.0f);
   struct Near {

@@ -12,10 +12,13 @@ namespace gatcore::character {
 
 // The sample of one prepared character: candidate features, candidate
 // targets (the artist's weights), bone mask [1, k] (1 for the candidates that
-// name a joint), log prior (bone_heat_log_prior), the mesh graph. `candidates` (optional) receives the lists.
-models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, BoneCandidates* candidates = nullptr);
+// name a joint), log prior (bone_heat_log_prior), the mesh graph, over the
+// bone heat `prior` names (the model's: heat_prior(config)). `candidates`
+// (optional) receives the lists.
+models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, HeatPrior prior,
+                                     BoneCandidates* candidates = nullptr);
 
-std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, DatasetPart part, int k);
+std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, DatasetPart part, int k, HeatPrior prior);
 
 // The vertex columns of the bone-candidate features (rest position and
 // normal) are the only ones measured in the world frame rather than from the

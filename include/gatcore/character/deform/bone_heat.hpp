@@ -63,7 +63,8 @@ struct BoneHeatParams {
   // under cut_below is dropped and one from cut_below to ramp_until scaled
   // linearly from 0 up to ramp_until, so a far bone's faint diffusion tail is
   // no influence (artists paint none). cut_below = 0: the solved heat as is
-  // (skinweights-any's prior reads it so). 0 <= cut_below <= ramp_until.
+  // (the prior of skinweights-any models configured without
+  // prior_weight_limit reads it so). 0 <= cut_below <= ramp_until.
   float cut_below = 0.025f;
   float ramp_until = 0.05f;
   int max_influences = 4;   // kept per vertex (largest), renormalised

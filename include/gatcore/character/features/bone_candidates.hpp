@@ -15,13 +15,16 @@
 //   above the bone's closest point, bone length, fraction along the bone
 //   (clamped to [0, 1]), depth in the hierarchy / the skeleton's depth,
 //   1 for a leaf joint, the bone's bone-heat weight at the vertex
-//   (deform/bone_heat.hpp, unpruned: a classical prior the network corrects)
+//   (deform/bone_heat.hpp, not cut to the top few influences: a classical
+//   prior the network corrects; with or without Blender's weight limit, as
+//   HeatPrior below says)
 // (lengths in the normalised frame: height 1). Candidates past the joint
 // count are zero rows with joint -1.
 #include <cstdint>
 #include <vector>
 
 #include "gatcore/character/features/prepared_character.hpp"
+#include "gatcore/models/config.hpp"
 #include "gatcore/tensor.hpp"
 
 namespace gatcore::character {
@@ -45,8 +48,16 @@ struct BoneCandidates {
 
 std::int64_t bone_candidate_feature_dim(int k);
 
+// The bone heat the features' prior column and the logit prior read: with
+// Blender's weight limit (BoneHeatParams' cut_below / ramp_until, what
+// bone_heat_weights gives by default) or without it. A model is trained and
+// applied with one of them; its config records which
+// (models::ModelConfig::prior_weight_limit).
+enum class HeatPrior { unlimited, weight_limited };
+HeatPrior heat_prior(const models::ModelConfig& cfg);
+
 // Throws InvalidArgument for k < 1 or a character without joints.
-BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k = kDefaultCandidates);
+BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, HeatPrior prior);
 
 // The character's weights over candidates ([n, k], rows summing to 1: the
 // artist's weights of the candidate joints renormalised; a vertex whose
