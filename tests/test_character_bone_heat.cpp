@@ -294,6 +294,45 @@ TEST_CASE("a limb's last bone reaches an IK target off the root up to 3 parent l
   // parent lengths: the test above.
 }
 
+TEST_CASE("a joint whose child carries the chain straight on is one bone: its other children are branches",
+          "[bone_heat]") {
+  // root at y = 0, Chest (bone1) at y = 1; Neck straight on at y = 1.8 and
+  // two shoulders 37 degrees off the chest's direction, starting just above
+  // it. The chest is one bone ending at the neck (a rig's bone has one tail);
+  // the fan to every child within branch_cos (60 degrees) is the old rule.
+  Character ch = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  add_joint(ch.skeleton, "Neck", 1, {0.0f, 1.8f, 0.0f});
+  add_joint(ch.skeleton, "ShoulderL", 1, {0.3f, 1.4f, 0.0f});
+  add_joint(ch.skeleton, "ShoulderR", 1, {-0.3f, 1.4f, 0.0f});
+  // Two ears off the neck, neither straight on: the neck keeps its fan.
+  add_joint(ch.skeleton, "EarL", 2, {0.3f, 2.2f, 0.0f});
+  add_joint(ch.skeleton, "EarR", 2, {-0.3f, 2.2f, 0.0f});
+  // A second child of the root (a leg): a root's children all start on it.
+  add_joint(ch.skeleton, "Leg", 0, {0.4f, -0.3f, 0.0f});
+  const auto seg = bone_segments(ch.skeleton);
+  REQUIRE(seg[1].size() == 1);
+  CHECK(seg[1][0].b[0] == Approx(0.0f).margin(1e-6));
+  CHECK(seg[1][0].b[1] == Approx(1.8f));
+  CHECK(seg[2].size() == 2);  // the neck: both ears
+  CHECK(seg[0].size() == 2);  // the root: chest and leg
+  BoneHeatParams fan;
+  fan.continue_cos = 2.0f;
+  const auto old = bone_segments(ch.skeleton, fan);
+  CHECK(old[1].size() == 3);
+  CHECK(old[2].size() == 2);
+  CHECK(old[0].size() == 2);
+  // The straight-on threshold is a cosine: a neck 15 degrees off the chest's
+  // axis (cos 0.966 < 0.98) is no continuation, and the fan comes back.
+  Character bent = charfix::tube_character(24, 16, 2.0f, 0.25f, 0.0f);
+  add_joint(bent.skeleton, "Neck", 1, {0.8f * std::sin(0.2618f), 1.0f + 0.8f * std::cos(0.2618f), 0.0f});
+  add_joint(bent.skeleton, "ShoulderL", 1, {0.3f, 1.4f, 0.0f});
+  CHECK(bone_segments(bent.skeleton)[1].size() == 2);
+  // A setting that is no number is refused, naming it.
+  BoneHeatParams bad;
+  bad.continue_cos = std::nanf("");
+  CHECK_THROWS_WITH(bone_heat_weights(ch, bad), Catch::Contains("continue_cos"));
+}
+
 TEST_CASE("bone heat's weight limit drops a far bone's faint heat and ramps the next (Blender's)", "[bone_heat]") {
   // Three joints along a tube: every vertex gets heat from all of them, the
   // far ones faint. The limited weights are the solved heat through

@@ -40,9 +40,10 @@ PreparedCharacter procedural(ProceduralKind kind, std::uint32_t seed) {
   return prepare_character(procedural_character(o), DeltaMushParams{0, 0.5f});
 }
 
-// The bone heat new skinweights-any models read (ModelConfig::defaults; a
-// test below checks they do).
-constexpr HeatPrior kPrior = HeatPrior::weight_limited;
+// The bone heat new skinweights-any models read (their defaults' rules).
+BoneHeatParams new_model_heat() {
+  return prior_bone_heat(models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(4), 4));
+}
 
 // A skinweights-any small enough for tests to run in milliseconds.
 models::ModelConfig small_any_config(int k) {
@@ -93,7 +94,7 @@ std::pair<double, double> kl_before_after(models::Model& m, const models::Normal
 
 TEST_CASE("bone candidates of a two-bone tube: nearest first, padded past the joint count", "[skin_any]") {
   const PreparedCharacter pc = prepare_character(charfix::tube_character(12, 8, 2.0f, 0.25f, 0.0f));
-  const BoneCandidates c = bone_candidate_features(pc, 4, HeatPrior::weight_limited);
+  const BoneCandidates c = bone_candidate_features(pc, 4, new_model_heat());
   const std::int64_t n = pc.character.mesh.num_vertices();
   REQUIRE(c.k == 4);
   REQUIRE(c.valid == 2);
@@ -126,7 +127,7 @@ TEST_CASE("bone candidates of a two-bone tube: nearest first, padded past the jo
     for (int k = 0; k < 4; ++k) sum += t.at(v, k);
     CHECK(sum == Approx(1.0));
   }
-  CHECK_THROWS_AS(bone_candidate_features(pc, 0, HeatPrior::weight_limited), InvalidArgument);
+  CHECK_THROWS_AS(bone_candidate_features(pc, 0, new_model_heat()), InvalidArgument);
 }
 
 TEST_CASE("skinweights-any trains on characters with different bone counts in one batch", "[skin_any]") {
@@ -136,7 +137,7 @@ TEST_CASE("skinweights-any trains on characters with different bone counts in on
   const PreparedCharacter b = prepare_character(charfix::tube_character(12, 8, 2.0f, 0.25f, 0.3f));
   REQUIRE(a.character.skeleton.num_joints() != b.character.skeleton.num_joints());
   const int k = 4;
-  std::vector<models::Sample> train{bone_candidate_sample(a, k, kPrior), bone_candidate_sample(b, k, kPrior)};
+  std::vector<models::Sample> train{bone_candidate_sample(a, k, new_model_heat()), bone_candidate_sample(b, k, new_model_heat())};
   CHECK(train[1].bone_mask.at(0, 1) == 1.0f);
   CHECK(train[1].bone_mask.at(0, 2) == 0.0f);
   // Both scorers: the classifier's column per slot, and one MLP shared by
@@ -189,7 +190,7 @@ TEST_CASE("finite-difference gradients through a reduced skinweights-any, two bo
   for (float& x : tube.mesh.positions) x += jitter(rng);
   const PreparedCharacter b = prepare_character(tube);
   const int k = 4;
-  std::vector<models::Sample> data{bone_candidate_sample(a, k, kPrior), bone_candidate_sample(b, k, kPrior)};
+  std::vector<models::Sample> data{bone_candidate_sample(a, k, new_model_heat()), bone_candidate_sample(b, k, new_model_heat())};
   models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
   cfg.stage1 = {8};
   cfg.gc_heads = {2, 1};
@@ -234,7 +235,7 @@ TEST_CASE("skinweights-any predicts the same weights whatever the joints are cal
   auto model = models::make_model(cfg, 5);
   randomise_last_layer(*model, 6);  // not just bone heat: the network's own scores too
   const PreparedCharacter pc = prepare_character(original, DeltaMushParams{0, 0.5f});
-  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k, kPrior)}, false);
+  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k, new_model_heat())}, false);
   const WeightPrediction p = predict_skin_weights_any(*model, norm, original, 3);
   const WeightPrediction q = predict_skin_weights_any(*model, norm, renamed, 3);
   REQUIRE(p.weights.num_vertices() == original.mesh.num_vertices());
@@ -309,7 +310,7 @@ TEST_CASE("skinweights-any and bone heat give the same weights in centimetres an
   auto model = models::make_model(cfg, 5);
   randomise_last_layer(*model, 8);
   const PreparedCharacter pc = prepare_character(metres, DeltaMushParams{0, 0.5f});
-  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k, kPrior)}, false);
+  const models::Normaliser norm = models::Normaliser::fit({bone_candidate_sample(pc, k, new_model_heat())}, false);
   SECTION("skinweights-any") {
     const WeightPrediction p = predict_skin_weights_any(*model, norm, metres, 3);
     const WeightPrediction q = predict_skin_weights_any(*model, norm, cm, 3);
@@ -344,7 +345,7 @@ TEST_CASE("skinweights-any that ignores the world columns gives a turned charact
   const int k = 4;
   const PreparedCharacter pc = prepare_character(c, DeltaMushParams{0, 0.5f});
   const PreparedCharacter pt = prepare_character(turned, DeltaMushParams{0, 0.5f});
-  const models::Sample sc = bone_candidate_sample(pc, k, kPrior), st = bone_candidate_sample(pt, k, kPrior);
+  const models::Sample sc = bone_candidate_sample(pc, k, new_model_heat()), st = bone_candidate_sample(pt, k, new_model_heat());
   // The fixture turned the character: the world columns moved, the pair columns did not.
   double world = 0, pair = 0;
   for (std::int64_t v = 0; v < sc.features.rows(); ++v)
@@ -387,31 +388,34 @@ TEST_CASE("skinweights-any that ignores the world columns gives a turned charact
 
 TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates", "[skin_any]") {
   // The log prior and the zero last layer: softmax(log(h + eps)) over the
-  // valid candidates, h bone heat's weight of the candidate joint, with or
-  // without Blender's weight limit as the config says (computed here from
-  // bone_heat_weights, not read back from the features).
+  // valid candidates, h bone heat's weight of the candidate joint, by the
+  // rules the config names (computed here from bone_heat_weights, not read
+  // back from the features).
   const bool shared = GENERATE(false, true);
-  const bool limited = GENERATE(false, true);
+  const bool current = GENERATE(false, true);
   for (const int k : {4, 8}) {
-    INFO("k " << k << ", pair scorer " << shared << ", weight limit " << limited);
+    INFO("k " << k << ", pair scorer " << shared << ", current rules " << current);
     const PreparedCharacter pc = procedural(ProceduralKind::humanoid, 6);
     models::ModelConfig cfg = small_any_config(k);
-    cfg.prior_weight_limit = limited;
+    cfg.prior_weight_limit = cfg.prior_straight_chains = current;
     if (shared) {
       cfg.pair_scorer = {8};
       cfg.pair_features = kPairFeatures;
     }
     BoneCandidates c;
-    const models::Sample s = bone_candidate_sample(pc, k, heat_prior(cfg), &c);
+    const models::Sample s = bone_candidate_sample(pc, k, prior_bone_heat(cfg), &c);
     auto model = models::make_model(cfg, 9);
     const models::Normaliser norm = models::Normaliser::fit({s}, false);
     const Tensor y = models::predict(*model, s, norm, 0);
-    // The inference path reads the prior from the model's config.
+    // The inference path reads the rules from the model's config.
     const SkinWeights own = predict_skin_weights_any(*model, norm, pc, k);
     BoneHeatParams hp;
     hp.max_influences = 64;
     hp.min_weight = 0.0f;
-    if (!limited) hp.cut_below = 0.0f;
+    if (!current) {
+      hp.cut_below = 0.0f;
+      hp.continue_cos = 2.0f;
+    }
     const SkinWeights heat = bone_heat_weights(pc.character, hp);
     const std::int64_t n = pc.character.mesh.num_vertices();
     REQUIRE(y.rows() == n);
@@ -458,7 +462,7 @@ TEST_CASE("untrained skinweights-any is bone heat over each vertex's candidates"
 TEST_CASE("the classifier's dropout acts while training only, and is recorded in the configuration", "[skin_any]") {
   const PreparedCharacter a = procedural(ProceduralKind::humanoid, 1);
   const int k = 4;
-  const std::vector<models::Sample> train{bone_candidate_sample(a, k, kPrior)};
+  const std::vector<models::Sample> train{bone_candidate_sample(a, k, new_model_heat())};
   const models::Normaliser norm = models::Normaliser::fit(train, false);
   models::ModelConfig plain = small_any_config(k);
   plain.classifier = {32, 16};
@@ -496,7 +500,7 @@ TEST_CASE("the classifier's dropout acts while training only, and is recorded in
 
 TEST_CASE("a batch takes every sample's log prior or none", "[skin_any]") {
   const PreparedCharacter a = procedural(ProceduralKind::humanoid, 1);
-  const models::Sample with = bone_candidate_sample(a, 4, kPrior);
+  const models::Sample with = bone_candidate_sample(a, 4, new_model_heat());
   models::Sample without = with;
   without.prior = Tensor{};
   CHECK_THROWS_AS(models::make_batch({&with, &without}, {{}, {}}, {}, {}), InvalidArgument);
@@ -513,15 +517,22 @@ TEST_CASE("a batch takes every sample's log prior or none", "[skin_any]") {
   // Configurations round-trip the key; ones written before it read as off.
   CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
   CHECK_FALSE(models::ModelConfig::from_text("name = skinweights-any\n").logit_prior);
-  // New models read the weight-limited heat; a config from before the key
-  // reads the unlimited heat its model was trained on.
+  // New models read bone heat with its current rules; a config from before
+  // the keys reads the bone heat its model was trained on.
   CHECK(cfg.prior_weight_limit);
-  CHECK(heat_prior(cfg) == kPrior);
-  CHECK(heat_prior(models::ModelConfig::from_text("name = skinweights-any\nlogit_prior = true\n")) ==
-        HeatPrior::unlimited);
-  cfg.prior_weight_limit = false;
-  CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
-  cfg.prior_weight_limit = true;
+  CHECK(cfg.prior_straight_chains);
+  CHECK(prior_bone_heat(cfg).cut_below == BoneHeatParams{}.cut_below);
+  CHECK(prior_bone_heat(cfg).continue_cos == BoneHeatParams{}.continue_cos);
+  const models::ModelConfig old = models::ModelConfig::from_text("name = skinweights-any\nlogit_prior = true\n");
+  CHECK(prior_bone_heat(old).cut_below == 0.0f);
+  CHECK(prior_bone_heat(old).continue_cos > 1.0f);
+  for (const bool limit : {false, true})
+    for (const bool chains : {false, true}) {
+      models::ModelConfig c = cfg;
+      c.prior_weight_limit = limit;
+      c.prior_straight_chains = chains;
+      CHECK(models::ModelConfig::from_text(c.to_text()) == c);
+    }
   cfg.pair_scorer = {8, 4};
   cfg.pair_features = kPairFeatures;
   CHECK(models::ModelConfig::from_text(cfg.to_text()) == cfg);
@@ -538,7 +549,7 @@ TEST_CASE("skinweights-any's validation L1 is gat eval's L1 over the character's
   const PreparedCharacter pc = procedural(ProceduralKind::humanoid, 3);
   const int k = 2;
   BoneCandidates c;
-  const models::Sample s = bone_candidate_sample(pc, k, kPrior, &c);
+  const models::Sample s = bone_candidate_sample(pc, k, new_model_heat(), &c);
   REQUIRE(s.target_mass.defined());
   int partial = 0, none = 0;
   for (std::int64_t v = 0; v < s.target_mass.rows(); ++v) {

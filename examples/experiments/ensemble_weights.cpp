@@ -76,9 +76,12 @@ int main(int argc, char** argv) {
   for (int i = 2; i < argc; ++i) { ms.push_back(models::load_checkpoint(argv[i])); ms.back().model->fold_batch_norm(); }
   const int M = int(ms.size()), k = int(ms[0].model->config().out_dim);
   // One sample per character serves every member: they must read the same features.
-  const HeatPrior prior = heat_prior(ms[0].model->config());
+  const models::ModelConfig& first = ms[0].model->config();
+  const BoneHeatParams heat = prior_bone_heat(first);
   for (int i = 1; i < M; ++i)
-    if (ms[std::size_t(i)].model->config().out_dim != k || heat_prior(ms[std::size_t(i)].model->config()) != prior) {
+    if (const models::ModelConfig& c = ms[std::size_t(i)].model->config();
+        c.out_dim != k || c.prior_weight_limit != first.prior_weight_limit ||
+        c.prior_straight_chains != first.prior_straight_chains) {
       std::fprintf(stderr, "%s: its candidates or bone-heat prior differ from %s's\n", argv[i + 2], argv[2]);
       return 2;
     }
@@ -100,7 +103,7 @@ int main(int argc, char** argv) {
       const auto& j2b = td.super.joint_to_bone[std::size_t(ci)];
       const auto& mask = td.super.mask[std::size_t(ci)];
       BoneCandidates c;
-      const models::Sample sample = bone_candidate_sample(pc, k, prior, &c);
+      const models::Sample sample = bone_candidate_sample(pc, k, heat, &c);
       std::vector<Tensor> ys;
       for (auto& m : ms) ys.push_back(probs(m, sample));
       Tensor avg = ys[0].clone();

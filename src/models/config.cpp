@@ -36,6 +36,7 @@ ModelConfig ModelConfig::defaults(const std::string& name, std::int64_t in_dim, 
     c.pool = false;
     c.logit_prior = true;
     c.prior_weight_limit = true;
+    c.prior_straight_chains = true;
   }
   if (out_dim > 0) c.out_dim = out_dim;
   return c;
@@ -157,6 +158,7 @@ const std::vector<Field>& fields() {
       bool_field("pool", &ModelConfig::pool),
       bool_field("logit_prior", &ModelConfig::logit_prior),
       bool_field("prior_weight_limit", &ModelConfig::prior_weight_limit),
+      bool_field("prior_straight_chains", &ModelConfig::prior_straight_chains),
       list_field("pair_scorer", &ModelConfig::pair_scorer),
       int_field("pair_features", &ModelConfig::pair_features),
       list_field("global_mlp", &ModelConfig::global_mlp),

@@ -285,13 +285,14 @@ int main(int argc, char** argv) {
       else if (a[i] == "--nearest-visible") bp.nearest_only = false;
       else if (a[i] == "--no-facing") bp.facing_distance = false;
       else if (a[i] == "--no-weight-limit") bp.cut_below = 0.0f;
+      else if (a[i] == "--branch-cos" && i + 1 < a.size()) bp.branch_cos = std::stof(a[++i]);
       else if (a[i] == "--confusions" && i + 1 < a.size()) confusions = std::stoi(a[++i]);
       else rest.push_back(a[i]);
     }
     if (rest.size() == 2) return run(rest[0], rest[1], "", bp, confusions);
     if (rest.size() == 4 && rest[2] == "--json") return run(rest[0], rest[1], rest[3], bp, confusions);
     std::fprintf(stderr,
-                 "usage: bone_heat_peer CHARACTER.glb BLENDER.json [--json OUT.json] [--heat C] [--no-visibility] [--nearest-visible] [--no-facing] [--no-weight-limit] [--confusions N]\n"
+                 "usage: bone_heat_peer CHARACTER.glb BLENDER.json [--json OUT.json] [--heat C] [--no-visibility] [--nearest-visible] [--no-facing] [--no-weight-limit] [--branch-cos C] [--confusions N]\n"
                  "       bone_heat_peer --procedural humanoid|creature SEED OUT.glb\n");
     return 2;
   } catch (const std::exception& e) {

@@ -193,9 +193,10 @@ void print_model(const std::string& path) {
                       "weights whichever way a character faces"
                     : "; reads the vertex's world-frame position and normal (--world-columns use)";
   if (models::any_skeleton(c.kind()))
-    features += heat_prior(c) == HeatPrior::weight_limited
-                    ? "; bone heat prior with Blender's weight limit"
-                    : "; bone heat prior without a weight limit (a model from before the limit)";
+    features += std::string("; bone heat prior ") +
+                (c.prior_weight_limit ? "with Blender's weight limit" : "without a weight limit") +
+                (c.prior_straight_chains ? ", one bone per straight chain" : ", segments fanning to every child") +
+                (c.prior_weight_limit && c.prior_straight_chains ? "" : " (a model from before these rules)");
   std::printf("features   %lld in, %lld out (%s)\n", static_cast<long long>(c.in_dim), static_cast<long long>(c.out_dim),
               features.c_str());
   std::printf("config\n");

@@ -323,7 +323,7 @@ int run_train(TrainArgs a) {
   int geodesic_k = 1;
   for (int k : model->pool_sizes()) geodesic_k = std::max(geodesic_k, k);
   const auto data_samples = [&](character::DatasetPart part, int epoch, const character::SampleFilter& build = {}) {
-    if (any_skeleton) return character::bone_candidate_samples(*td, part, int(cfg.out_dim), character::heat_prior(cfg));
+    if (any_skeleton) return character::bone_candidate_samples(*td, part, int(cfg.out_dim), character::prior_bone_heat(cfg));
     gat::Progress making(std::string("making ") + (part == character::DatasetPart::train ? "training" : "validation") +
                              " samples",
                          0, "samples", quiet);

@@ -53,15 +53,17 @@ struct ModelConfig {
   // training learns corrections to it. Configs written before the key
   // existed read as off.
   bool logit_prior = false;
-  // Whether that prior (and the bone-heat column of skinweights-any's
-  // features) is bone heat with Blender's weight limit (heat under 2.5 % of
-  // the vertex dropped, ramped up to 5 %; deform/bone_heat.hpp's
-  // BoneHeatParams) or bone heat unlimited. The limited heat is closer to
-  // artists' weights on every family measured (docs/results/
-  // bone-heat-vs-blender.md), so new skinweights-any models start from it;
-  // configs written before the key existed read as off (unlimited), so
-  // their features are what they were trained on.
+  // The bone heat (character/deform/bone_heat.hpp) that prior, and
+  // skinweights-any's candidate bones and bone-heat column, follow:
+  // prior_weight_limit: with Blender's weight limit (heat under 2.5 % of the
+  // vertex dropped, ramped up to 5 %); prior_straight_chains: a joint with a
+  // child carrying its chain straight on is one bone ending there (not a fan
+  // to every child). Both bring bone heat closer to artists' weights on every
+  // family measured (docs/results/bone-heat-vs-blender.md), so new
+  // skinweights-any models read them; configs written before a key existed
+  // read it as off, so an older model's features are what it was trained on.
   bool prior_weight_limit = false;
+  bool prior_straight_chains = false;
   // A shared per-(vertex, output slot) scorer instead of the classifier's
   // last layer (skinweights-any; RigNet's design): the input's last
   // out_dim * pair_features columns are pair_features columns per slot

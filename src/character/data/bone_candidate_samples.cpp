@@ -4,8 +4,9 @@
 
 namespace gatcore::character {
 
-models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, HeatPrior prior, BoneCandidates* candidates) {
-  BoneCandidates c = bone_candidate_features(pc, k, prior);
+models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, const BoneHeatParams& heat,
+                                     BoneCandidates* candidates) {
+  BoneCandidates c = bone_candidate_features(pc, k, heat);
   models::Sample m;
   m.name = pc.character.name;
   m.features = c.features;
@@ -20,10 +21,11 @@ models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, HeatPri
   return m;
 }
 
-std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, DatasetPart part, int k, HeatPrior prior) {
+std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, DatasetPart part, int k,
+                                                   const BoneHeatParams& heat) {
   std::vector<models::Sample> out;
   for (std::int32_t c : data.part(part)) {
-    models::Sample m = bone_candidate_sample(data.characters[std::size_t(c)], k, prior);
+    models::Sample m = bone_candidate_sample(data.characters[std::size_t(c)], k, heat);
     m.name = data.description.characters[std::size_t(c)];
     out.push_back(std::move(m));
   }

@@ -153,10 +153,15 @@ struct Bvh {
 
 }  // namespace
 
-std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float branch_cos, float leaf_extension) {
+std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, const BoneHeatParams& params) {
+  const double branch_cos = params.branch_cos, continue_cos = params.continue_cos;
   const std::int32_t nj = s.num_joints();
   GATCORE_CHECK(static_cast<std::int32_t>(s.inverse_bind.size()) == nj, "bone_segments: ", s.inverse_bind.size(),
                 " inverse bind matrices for ", nj, " joints");
+  GATCORE_CHECK(std::isfinite(params.branch_cos) && std::isfinite(params.continue_cos) &&
+                    std::isfinite(params.leaf_extension) && params.leaf_extension >= 0,
+                "bone_segments: branch_cos, continue_cos and leaf_extension must be finite (leaf_extension >= 0), got ",
+                params.branch_cos, ", ", params.continue_cos, ", ", params.leaf_extension);
   std::vector<Mat4> bind(static_cast<std::size_t>(nj));
   std::vector<Vec3> head(static_cast<std::size_t>(nj));
   for (std::int32_t j = 0; j < nj; ++j) {
@@ -181,13 +186,19 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
   for (std::int32_t j = 0; j < nj; ++j) {
     const std::int32_t p = s.parents[j];
     // Branches (a child turning away from the parent's direction, like the
-    // shoulders off the neck) are their own bones, not this joint's.
+    // arms off a collar, or any child beside one that carries the chain
+    // straight on, like the shoulders off the chest) are their own bones,
+    // not this joint's.
     std::int32_t best = -1;
     double best_cos = -2;
     for (std::int32_t c : children[j]) {
       const double cs = p >= 0 ? dot(dir(p, j), dir(j, c)) : 1.0;
-      if (cs >= branch_cos) seg[j].push_back({head[j], head[c]});
       if (cs > best_cos) best_cos = cs, best = c;
+    }
+    const double keep_cos = best_cos >= continue_cos ? continue_cos : branch_cos;
+    for (std::int32_t c : children[j]) {
+      const double cs = p >= 0 ? dot(dir(p, j), dir(j, c)) : 1.0;
+      if (cs >= keep_cos) seg[j].push_back({head[j], head[c]});
     }
     if (seg[j].empty() && best >= 0) seg[j].push_back({head[j], head[best]});
     if (!children[j].empty()) continue;
@@ -222,7 +233,7 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float bra
       if (at >= 0) {
         tail = head[at];
       } else {
-        const double len = leaf_extension * plen;
+        const double len = params.leaf_extension * plen;
         for (int c = 0; c < 3; ++c) tail[c] += static_cast<float>(len * d[c]);
       }
     }
@@ -244,6 +255,10 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
                     params.ramp_until >= params.cut_below,
                 ch.name, ": bone heat weight limit needs 0 <= cut_below <= ramp_until, got cut_below ",
                 params.cut_below, ", ramp_until ", params.ramp_until);
+  GATCORE_CHECK(std::isfinite(params.branch_cos) && std::isfinite(params.continue_cos) &&
+                    std::isfinite(params.leaf_extension) && params.leaf_extension >= 0,
+                ch.name, ": bone heat needs finite branch_cos, continue_cos and leaf_extension >= 0, got ",
+                params.branch_cos, ", ", params.continue_cos, ", ", params.leaf_extension);
   GATCORE_CHECK(params.deforming.empty() || static_cast<std::int32_t>(params.deforming.size()) == nj, ch.name,
                 ": bone heat deforming mask has ", params.deforming.size(), " entries for ", nj, " joints");
   GATCORE_CHECK(params.joint_override.empty() || static_cast<std::int32_t>(params.joint_override.size()) == nj,
@@ -305,7 +320,7 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
   }
 
   // Bones.
-  const auto segs = bone_segments(sk, params.branch_cos, params.leaf_extension);
+  const auto segs = bone_segments(sk, params);
   struct Seg {
     V3 a, b;
     std::int32_t joint;

@@ -12,11 +12,16 @@ namespace gatcore::character {
 
 std::int64_t bone_candidate_feature_dim(int k) { return kVertexColumns + static_cast<std::int64_t>(k) * kPairFeatures; }
 
-HeatPrior heat_prior(const models::ModelConfig& cfg) {
-  return cfg.prior_weight_limit ? HeatPrior::weight_limited : HeatPrior::unlimited;
+BoneHeatParams prior_bone_heat(const models::ModelConfig& cfg) {
+  BoneHeatParams hp;
+  hp.max_influences = 64;
+  hp.min_weight = 0.0f;
+  if (!cfg.prior_weight_limit) hp.cut_below = 0.0f;
+  if (!cfg.prior_straight_chains) hp.continue_cos = 2.0f;
+  return hp;
 }
 
-BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, HeatPrior prior) {
+BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, const BoneHeatParams& heat) {
   const Character& ch = pc.character;
   const Skeleton& sk = ch.skeleton;
   const std::int32_t nj = sk.num_joints();
@@ -33,7 +38,7 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, HeatP
   const Tensor base = neuroskinning_rest_features(pc, all_vertices(n));
   const std::vector<float> rest = apply_normalisation(pc.normalisation, ch.mesh.positions);
   // Segments in the normalised frame.
-  const auto segs = bone_segments(sk);
+  const auto segs = bone_segments(sk, heat);
   std::vector<std::vector<std::pair<Vec3, Vec3>>> seg(static_cast<std::size_t>(nj));
   for (std::int32_t j = 0; j < nj; ++j)
     for (const auto& s : segs[j]) seg[j].push_back({apply_normalisation(pc.normalisation, s.a), apply_normalisation(pc.normalisation, s.b)});
@@ -44,13 +49,9 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, HeatP
     max_depth = std::max(max_depth, depth[j]);
   }
   const auto children = sk.children();
-  // Bone heat's weights (not cut to a few influences) as a classical prior
-  // per candidate: the network learns the corrections to it.
-  BoneHeatParams hp;
-  hp.max_influences = 64;
-  hp.min_weight = 0.0f;
-  if (prior == HeatPrior::unlimited) hp.cut_below = 0.0f;
-  const SkinWeights heat = bone_heat_weights(ch, hp);
+  // Bone heat's weights as a classical prior per candidate: the network
+  // learns the corrections to it.
+  const SkinWeights prior = bone_heat_weights(ch, heat);
   std::vector<float> heat_row(static_cast<std::size_t>(nj), 0.0f);
   struct Near {
     float d, along, perp, dy, len, t;
@@ -61,7 +62,7 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, HeatP
     float* row = out.features.data() + v * dim;
     for (int c = 0; c < kVertexColumns; ++c) row[c] = base.at(v, c);
     const float x[3] = {rest[3 * v], rest[3 * v + 1], rest[3 * v + 2]};
-    for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e) heat_row[heat.joint[e]] = heat.weight[e];
+    for (std::int64_t e = prior.ptr[v]; e < prior.ptr[v + 1]; ++e) heat_row[prior.joint[e]] = prior.weight[e];
     for (std::int32_t j = 0; j < nj; ++j) {
       Near best{1e30f, 0, 0, 0, 0, 0};
       for (const auto& [a, b] : seg[j]) {
@@ -112,7 +113,7 @@ BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, HeatP
       f[8] = children[j].empty() ? 1.0f : 0.0f;
       f[kBoneHeatPairColumn] = heat_row[j];
     }
-    for (std::int64_t e = heat.ptr[v]; e < heat.ptr[v + 1]; ++e) heat_row[heat.joint[e]] = 0.0f;
+    for (std::int64_t e = prior.ptr[v]; e < prior.ptr[v + 1]; ++e) heat_row[prior.joint[e]] = 0.0f;
   }
   return out;
 }

@@ -71,7 +71,7 @@ SkinWeights predict_skin_weights_any(models::Model& model, const models::Normali
                 " is not the skeleton-agnostic skin-weight model (skinweights-any)");
   GATCORE_CHECK(max_influences >= 1, "predict_skin_weights_any: max_influences must be >= 1, got ", max_influences);
   const int k = static_cast<int>(cfg.out_dim);
-  BoneCandidates c = bone_candidate_features(pc, k, heat_prior(cfg));
+  BoneCandidates c = bone_candidate_features(pc, k, prior_bone_heat(cfg));
   GATCORE_CHECK(cfg.in_dim == c.features.cols(), pc.character.name, ": the model takes ", cfg.in_dim,
                 " features, the bone candidates give ", c.features.cols());
   models::Sample s;

@@ -13,12 +13,13 @@ namespace gatcore::character {
 // The sample of one prepared character: candidate features, candidate
 // targets (the artist's weights), bone mask [1, k] (1 for the candidates that
 // name a joint), log prior (bone_heat_log_prior), the mesh graph, over the
-// bone heat `prior` names (the model's: heat_prior(config)). `candidates`
+// model's bone heat `heat` (prior_bone_heat of its config). `candidates`
 // (optional) receives the lists.
-models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, HeatPrior prior,
+models::Sample bone_candidate_sample(const PreparedCharacter& pc, int k, const BoneHeatParams& heat,
                                      BoneCandidates* candidates = nullptr);
 
-std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, DatasetPart part, int k, HeatPrior prior);
+std::vector<models::Sample> bone_candidate_samples(const TrainingData& data, DatasetPart part, int k,
+                                                   const BoneHeatParams& heat);
 
 // The vertex columns of the bone-candidate features (rest position and
 // normal) are the only ones measured in the world frame rather than from the

@@ -63,8 +63,8 @@ struct BoneHeatParams {
   // under cut_below is dropped and one from cut_below to ramp_until scaled
   // linearly from 0 up to ramp_until, so a far bone's faint diffusion tail is
   // no influence (artists paint none). cut_below = 0: the solved heat as is
-  // (the prior of skinweights-any models configured without
-  // prior_weight_limit reads it so). 0 <= cut_below <= ramp_until.
+  // (what skinweights-any models from before the limit read as their prior).
+  // 0 <= cut_below <= ramp_until.
   float cut_below = 0.025f;
   float ramp_until = 0.05f;
   int max_influences = 4;   // kept per vertex (largest), renormalised
@@ -73,6 +73,16 @@ struct BoneHeatParams {
   // parent's bone is a branch (shoulders off the neck, legs off a root at the
   // floor): not one of the joint's segments. -1 keeps every child.
   float branch_cos = 0.5f;
+  // Where a child carries the parent's direction straight on (cosine at
+  // least this: the chest going on to the neck, a forearm to the middle
+  // finger), the joint is one bone ending there, as a rig's bone has one
+  // tail (Blender's bones; artists weight that way): the other children are
+  // branches however little they turn (the shoulders starting just above the
+  // chest). Without such a child the segments fan to every child within
+  // branch_cos (a head to its two ears). A root's children all start on its
+  // axis, so it keeps its fan. Above 1: always the fan (skinweights-any
+  // models from before this rule).
+  float continue_cos = 0.98f;
   // A leaf joint's segment continues its parent's direction for this fraction
   // of the parent's length (0: the joint's point; a vertex past its parent's
   // tail then goes to it).
@@ -103,7 +113,7 @@ SkinWeights mix_with_bone_heat(const Character& ch, const SkinWeights& model, fl
 struct BoneSegment {
   Vec3 a, b;
 };
-std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, float branch_cos = 0.5f,
-                                                   float leaf_extension = 0.5f);
+// Reads params' branch_cos, continue_cos and leaf_extension.
+std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, const BoneHeatParams& params = {});
 
 }  // namespace gatcore::character

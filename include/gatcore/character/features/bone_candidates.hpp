@@ -16,13 +16,13 @@
 //   (clamped to [0, 1]), depth in the hierarchy / the skeleton's depth,
 //   1 for a leaf joint, the bone's bone-heat weight at the vertex
 //   (deform/bone_heat.hpp, not cut to the top few influences: a classical
-//   prior the network corrects; with or without Blender's weight limit, as
-//   HeatPrior below says)
+//   prior the network corrects; the rules of the model's, prior_bone_heat)
 // (lengths in the normalised frame: height 1). Candidates past the joint
 // count are zero rows with joint -1.
 #include <cstdint>
 #include <vector>
 
+#include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/features/prepared_character.hpp"
 #include "gatcore/models/config.hpp"
 #include "gatcore/tensor.hpp"
@@ -48,16 +48,16 @@ struct BoneCandidates {
 
 std::int64_t bone_candidate_feature_dim(int k);
 
-// The bone heat the features' prior column and the logit prior read: with
-// Blender's weight limit (BoneHeatParams' cut_below / ramp_until, what
-// bone_heat_weights gives by default) or without it. A model is trained and
-// applied with one of them; its config records which
-// (models::ModelConfig::prior_weight_limit).
-enum class HeatPrior { unlimited, weight_limited };
-HeatPrior heat_prior(const models::ModelConfig& cfg);
+// The bone heat a skinweights-any model reads (the segments its candidates
+// are measured from, its bone-heat column and its logit prior): the rules its
+// config records (models::ModelConfig::prior_weight_limit,
+// prior_straight_chains), so a model from before a rule reads the bone heat
+// it was trained on; not cut to a few influences.
+BoneHeatParams prior_bone_heat(const models::ModelConfig& cfg);
 
-// Throws InvalidArgument for k < 1 or a character without joints.
-BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, HeatPrior prior);
+// Throws InvalidArgument for k < 1 or a character without joints. `heat`:
+// the model's (prior_bone_heat).
+BoneCandidates bone_candidate_features(const PreparedCharacter& pc, int k, const BoneHeatParams& heat);
 
 // The character's weights over candidates ([n, k], rows summing to 1: the
 // artist's weights of the candidate joints renormalised; a vertex whose
