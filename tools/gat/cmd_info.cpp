@@ -187,16 +187,16 @@ void print_model(const std::string& path) {
                 " (each vertex's nearest joints: any skeleton)";
   if (!d.distortion_scales.empty())
     features += " + detail distortion at smoothing scales " + format_distortion_scales(d.distortion_scales);
-  if (models::any_skeleton(c.kind()))
+  if (models::any_skeleton(c.kind())) {
     features += ignores_world_columns(l.norm)
                     ? "; the vertex's world-frame position and normal ignored (--world-columns ignore): the same "
                       "weights whichever way a character faces"
                     : "; reads the vertex's world-frame position and normal (--world-columns use)";
-  if (models::any_skeleton(c.kind()))
     features += std::string("; bone heat prior ") +
                 (c.prior_weight_limit ? "with Blender's weight limit" : "without a weight limit") +
                 (c.prior_straight_chains ? ", one bone per straight chain" : ", segments fanning to every child") +
                 (c.prior_weight_limit && c.prior_straight_chains ? "" : " (a model from before these rules)");
+  }
   std::printf("features   %lld in, %lld out (%s)\n", static_cast<long long>(c.in_dim), static_cast<long long>(c.out_dim),
               features.c_str());
   std::printf("config\n");

@@ -4,6 +4,7 @@
 #include "gatcore/character/rig/bone_axis.hpp"
 
 #include <algorithm>
+#include <string>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -151,17 +152,21 @@ struct Bvh {
   }
 };
 
+// The settings bone_segments reads; `what` names the caller's subject.
+void check_segment_params(const BoneHeatParams& params, const std::string& what) {
+  GATCORE_CHECK(std::isfinite(params.branch_cos) && std::isfinite(params.continue_cos) &&
+                    std::isfinite(params.leaf_extension) && params.leaf_extension >= 0,
+                what, ": bone segments need finite branch_cos, continue_cos and leaf_extension >= 0, got ",
+                params.branch_cos, ", ", params.continue_cos, ", ", params.leaf_extension);
+}
+
 }  // namespace
 
 std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, const BoneHeatParams& params) {
-  const double branch_cos = params.branch_cos, continue_cos = params.continue_cos;
   const std::int32_t nj = s.num_joints();
   GATCORE_CHECK(static_cast<std::int32_t>(s.inverse_bind.size()) == nj, "bone_segments: ", s.inverse_bind.size(),
                 " inverse bind matrices for ", nj, " joints");
-  GATCORE_CHECK(std::isfinite(params.branch_cos) && std::isfinite(params.continue_cos) &&
-                    std::isfinite(params.leaf_extension) && params.leaf_extension >= 0,
-                "bone_segments: branch_cos, continue_cos and leaf_extension must be finite (leaf_extension >= 0), got ",
-                params.branch_cos, ", ", params.continue_cos, ", ", params.leaf_extension);
+  check_segment_params(params, "bone_segments");
   std::vector<Mat4> bind(static_cast<std::size_t>(nj));
   std::vector<Vec3> head(static_cast<std::size_t>(nj));
   for (std::int32_t j = 0; j < nj; ++j) {
@@ -189,18 +194,15 @@ std::vector<std::vector<BoneSegment>> bone_segments(const Skeleton& s, const Bon
     // arms off a collar, or any child beside one that carries the chain
     // straight on, like the shoulders off the chest) are their own bones,
     // not this joint's.
-    std::int32_t best = -1;
-    double best_cos = -2;
-    for (std::int32_t c : children[j]) {
-      const double cs = p >= 0 ? dot(dir(p, j), dir(j, c)) : 1.0;
-      if (cs > best_cos) best_cos = cs, best = c;
+    std::vector<double> cs;
+    for (std::int32_t c : children[j]) cs.push_back(p >= 0 ? dot(dir(p, j), dir(j, c)) : 1.0);
+    const auto best = std::max_element(cs.begin(), cs.end());
+    if (best != cs.end()) {
+      const double keep_cos = *best >= params.continue_cos ? params.continue_cos : params.branch_cos;
+      for (std::size_t i = 0; i < cs.size(); ++i)
+        if (cs[i] >= keep_cos) seg[j].push_back({head[j], head[children[j][i]]});
+      if (seg[j].empty()) seg[j].push_back({head[j], head[children[j][std::size_t(best - cs.begin())]]});
     }
-    const double keep_cos = best_cos >= continue_cos ? continue_cos : branch_cos;
-    for (std::int32_t c : children[j]) {
-      const double cs = p >= 0 ? dot(dir(p, j), dir(j, c)) : 1.0;
-      if (cs >= keep_cos) seg[j].push_back({head[j], head[c]});
-    }
-    if (seg[j].empty() && best >= 0) seg[j].push_back({head[j], head[best]});
     if (!children[j].empty()) continue;
     Vec3 tail = head[j];
     if (p >= 0) {
@@ -255,10 +257,7 @@ SkinWeights bone_heat_weights(const Character& ch, const BoneHeatParams& params)
                     params.ramp_until >= params.cut_below,
                 ch.name, ": bone heat weight limit needs 0 <= cut_below <= ramp_until, got cut_below ",
                 params.cut_below, ", ramp_until ", params.ramp_until);
-  GATCORE_CHECK(std::isfinite(params.branch_cos) && std::isfinite(params.continue_cos) &&
-                    std::isfinite(params.leaf_extension) && params.leaf_extension >= 0,
-                ch.name, ": bone heat needs finite branch_cos, continue_cos and leaf_extension >= 0, got ",
-                params.branch_cos, ", ", params.continue_cos, ", ", params.leaf_extension);
+  check_segment_params(params, ch.name);
   GATCORE_CHECK(params.deforming.empty() || static_cast<std::int32_t>(params.deforming.size()) == nj, ch.name,
                 ": bone heat deforming mask has ", params.deforming.size(), " entries for ", nj, " joints");
   GATCORE_CHECK(params.joint_override.empty() || static_cast<std::int32_t>(params.joint_override.size()) == nj,
