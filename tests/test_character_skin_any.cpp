@@ -74,9 +74,9 @@ void randomise_last_layer(models::Model& m, std::uint32_t seed) {
   REQUIRE(found == 2);  // W and b
 }
 
-// The training KL on `train` before and after `epochs` whole-mesh epochs of
-// `batch` characters at a rate of 3e-3.
-std::pair<double, double> kl_before_after(models::Model& m, const models::Normaliser& norm,
+// The training loss (the model's: cfg.weight_loss) on `train` before and
+// after `epochs` whole-mesh epochs of `batch` characters at a rate of 3e-3.
+std::pair<double, double> loss_before_after(models::Model& m, const models::Normaliser& norm,
                                           const std::vector<models::Sample>& train, int batch, int epochs) {
   models::TrainOptions opt = models::TrainOptions::defaults_for(m.config());
   opt.batch_size = batch;
@@ -141,9 +141,11 @@ TEST_CASE("skinweights-any trains on characters with different bone counts in on
   CHECK(train[1].bone_mask.at(0, 1) == 1.0f);
   CHECK(train[1].bone_mask.at(0, 2) == 0.0f);
   // Both scorers: the classifier's column per slot, and one MLP shared by
-  // every (vertex, candidate) pair.
+  // every (vertex, candidate) pair; both losses.
   const bool shared = GENERATE(false, true);
+  const models::WeightLoss loss = GENERATE(models::WeightLoss::kl, models::WeightLoss::l1);
   models::ModelConfig cfg = models::ModelConfig::defaults("skinweights-any", bone_candidate_feature_dim(k), k);
+  cfg.weight_loss = loss;
   cfg.stage1 = {32, 16};
   cfg.gc_dims = {16, 16, 16};
   cfg.global_mlp = {32};
@@ -152,15 +154,17 @@ TEST_CASE("skinweights-any trains on characters with different bone counts in on
     cfg.pair_scorer = {16};
     cfg.pair_features = kPairFeatures;
   }
-  INFO("pair scorer " << shared);
+  INFO("pair scorer " << shared << ", loss " << models::weight_loss_name(loss));
   auto model = models::make_model(cfg, 3);
   REQUIRE(model->pool_sizes().empty());
   const models::Normaliser norm = models::Normaliser::fit(train, false);
   // Both characters in one batch: per-character candidate masks, one softmax width.
-  const auto [before, after] = kl_before_after(*model, norm, train, 2, 60);
-  INFO("KL before " << before << ", after " << after);
+  const auto [before, after] = loss_before_after(*model, norm, train, 2, 60);
+  INFO("loss before " << before << ", after " << after);
   CHECK(std::isfinite(after));
-  CHECK(after < 0.6 * before);
+  // L1 falls more slowly than KL (a sign gradient, no log barrier): both
+  // thresholds are well below what 60 epochs of an unlearning model give.
+  CHECK(after < (loss == models::WeightLoss::kl ? 0.6 : 0.75) * before);
   // Masked candidates get exactly zero.
   const Tensor y = models::predict(*model, train[1], norm, 0);
   for (std::int64_t v = 0; v < y.rows(); ++v) {
@@ -492,9 +496,9 @@ TEST_CASE("the classifier's dropout acts while training only, and is recorded in
     dropped.classifier_dropout = bad;
     CHECK_THROWS_WITH(models::make_model(dropped, 5), Catch::Contains("classifier_dropout must be in [0, 1)"));
   }
-  // It still learns: the dropped model's KL on its character falls as the plain one's does.
-  const auto [before, after] = kl_before_after(*d, norm, train, 1, 40);
-  INFO("KL before " << before << ", after " << after);
+  // It still learns: the dropped model's loss on its character falls as the plain one's does.
+  const auto [before, after] = loss_before_after(*d, norm, train, 1, 40);
+  INFO("loss before " << before << ", after " << after);
   CHECK(after < 0.7 * before);
 }
 

@@ -135,6 +135,39 @@ TEST_CASE("displacement losses: MSE by default (the paper), L1 on request, recor
   CHECK_THROWS(task_loss(c, Var(pred), Tensor::zeros(7, 2)));
 }
 
+TEST_CASE("skin-weight losses: KL for the NeuroSkinning models, L1 over each vertex's bones for skinweights-any") {
+  ModelConfig c = ModelConfig::defaults("neuroskinning", 9, 4);
+  CHECK(c.weight_loss == WeightLoss::kl);
+  CHECK(ModelConfig::defaults("skinweights-any", 9, 4).weight_loss == WeightLoss::l1);
+  // Configurations written before the key existed read as KL, the loss they were trained with.
+  CHECK(ModelConfig::from_text("name = skinweights-any\nin_dim = 9\nout_dim = 4\n").weight_loss == WeightLoss::kl);
+  c.weight_loss = WeightLoss::l1;
+  CHECK(ModelConfig::from_text(c.to_text()).weight_loss == WeightLoss::l1);
+  CHECK_THROWS_WITH(ModelConfig::from_text("weight_loss = mse\n"), Catch::Contains("bad value 'mse' for 'weight_loss'"));
+  // Rows of a softmax against rows of a target distribution, one vertex with a masked (zero) column.
+  std::mt19937 rng(5);
+  Tensor logits = gradcheck::random_tensor(6, 4, rng), target = Tensor::zeros(6, 4);
+  for (std::int64_t i = 0; i < 6; ++i) {
+    double s = 0;
+    for (int j = 0; j < 4; ++j) s += target.at(i, j) = float(1 + (i * 7 + j * 3) % 5);
+    for (int j = 0; j < 4; ++j) target.at(i, j) = float(target.at(i, j) / s);
+  }
+  const Tensor pred = row_softmax(Var(logits), Tensor()).value();
+  double l1 = 0, kl = 0;
+  for (std::int64_t i = 0; i < 6; ++i)
+    for (int j = 0; j < 4; ++j) {
+      l1 += std::abs(double(pred.at(i, j)) - target.at(i, j)) / 6.0;
+      kl += target.at(i, j) * std::log(double(target.at(i, j)) / pred.at(i, j)) / 6.0;
+    }
+  CHECK(task_loss(c, Var(pred), target).value().at(0, 0) == Approx(l1).epsilon(1e-5));  // gat eval's L1 per vertex
+  c.weight_loss = WeightLoss::kl;
+  CHECK(task_loss(c, Var(pred), target).value().at(0, 0) == Approx(kl).epsilon(1e-4));
+  // Through the softmax, as the models train it.
+  c.weight_loss = WeightLoss::l1;
+  gradcheck::check("weight l1 loss",
+                   [&](const std::vector<Var>& v) { return task_loss(c, row_softmax(v[0], Tensor()), target); }, {logits});
+}
+
 TEST_CASE("masked bones get exactly zero probability; top-k renormalises") {
   Sample a = fixtures::wave_sample(6, 5, 0.f, true), b = fixtures::wave_sample(6, 5, 1.f, true);
   a.bone_mask = Tensor::from(1, 5, {1, 1, 0, 1, 1});

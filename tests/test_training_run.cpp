@@ -82,8 +82,16 @@ TEST_CASE("training run: each option applies to the models it names") {
   CHECK(check_new_model_options(config("skinweights-any"), r).empty());
   CHECK(check_new_model_options(config("neuroskinning"), r) == "--pair-scorer applies to skinweights-any, not neuroskinning");
   r = {};
-  r.loss = "l1";
-  CHECK_THAT(check_new_model_options(config("fc"), r), Catch::StartsWith("--loss applies to displacement models; fc"));
+  r.loss = "mse";
+  CHECK(check_new_model_options(config("fc"), r) == "--loss mse: fc learns skin weights, whose loss is kl or l1");
+  r.loss = "kl";
+  CHECK(check_new_model_options(config("densegats"), r) ==
+        "--loss kl: densegats learns displacements, whose loss is mse or l1");
+  CHECK(check_new_model_options(config("skinweights-any"), RunRequest{.data = "d.json", .loss = "kl"}).empty());
+  ModelConfig weights = config("skinweights-any");
+  apply_architecture_options(weights, RunRequest{.data = "d.json", .loss = "kl"});
+  CHECK(weights.weight_loss == models::WeightLoss::kl);
+  CHECK(weights.loss == models::DisplacementLoss::mse);  // the displacement field stays as it was
   r = {};
   r.linear_skip = true;
   CHECK(check_new_model_options(config("origat"), r).empty());

@@ -6,7 +6,8 @@
 #
 #   examples/experiments/unseen_skeletons.sh [--folds "women creatures khronos"] [--minutes M]
 #       [--sampling consecutive|random|full] [--pair-scorer W,...] [--world-columns ignore|use]
-#       [--precision fp32|bf16] [--lr-schedule step|cosine|plateau] [--average-decay D] [--classifier-dropout P] [--seed S] [--heat-blend S] [--augment KINDS [--augment-copies N]]
+#       [--precision fp32|bf16] [--lr-schedule step|cosine|plateau] [--average-decay D] [--classifier-dropout P] [--loss kl|l1]
+#       [--seed S] [--heat-blend S] [--augment KINDS [--augment-copies N]]
 #       [--corpus use|ignore|auto] [--evaluate-only] [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
@@ -70,6 +71,8 @@
 # --minutes); without it, the model's default.
 # --classifier-dropout P trains skinweights-any with dropout P after each of
 # its classifier's hidden layers (gat train --classifier-dropout).
+# --loss trains skinweights-any with that skin-weight loss (gat train --loss
+# kl|l1); without it, the model's default.
 # --average-decay D trains skinweights-any with a moving average of its
 # weights (gat train --average-decay): validation, --keep-best and the
 # evaluated model use the average.
@@ -88,7 +91,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= world_columns= precision=fp32
-heat_blend= augment= augment_copies=2 corpus=auto evaluate_only=0 lr_schedule= average_decay= classifier_dropout=
+heat_blend= augment= augment_copies=2 corpus=auto evaluate_only=0 lr_schedule= average_decay= classifier_dropout= loss=
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/tools/gat"
@@ -106,6 +109,7 @@ while [ $# -gt 0 ]; do
     --lr-schedule) lr_schedule="${2:?--lr-schedule needs step, cosine or plateau}"; shift 2 ;;
     --average-decay) average_decay="${2:?--average-decay needs a decay in [0, 1)}"; shift 2 ;;
     --classifier-dropout) classifier_dropout="${2:?--classifier-dropout needs a probability}"; shift 2 ;;
+    --loss) loss="${2:?--loss needs kl or l1}"; shift 2 ;;
     --heat-blend) heat_blend="${2:?--heat-blend needs a share in (0, 1]}"; shift 2 ;;
     --evaluate-only) evaluate_only=1; shift ;;
     --corpus) corpus="${2:?--corpus needs use, ignore or auto}"; shift 2 ;;
@@ -114,7 +118,7 @@ while [ $# -gt 0 ]; do
     --out) out="${2:?--out needs a directory}"; shift 2 ;;
     --data) data="${2:?--data needs a directory}"; shift 2 ;;
     --gat) gat="${2:?--gat needs a path}"; shift 2 ;;
-    -h|--help) sed -n '2,50p' "$0"; exit 0 ;;
+    -h|--help) awk 'NR > 1 && !/^#/ {exit} NR > 1' "$0"; exit 0 ;;
     *) die "unknown option $1" ;;
   esac
 done
@@ -285,7 +289,8 @@ PY
     --val-every 1 --batch 4 --sample-vertices 512 --sampling "$sampling" ${pair_scorer:+--pair-scorer "$pair_scorer"} \
     ${world_columns:+--world-columns "$world_columns"} \
     --precision "$precision" ${lr_schedule:+--lr-schedule "$lr_schedule"} \
-    ${average_decay:+--average-decay "$average_decay"} ${classifier_dropout:+--classifier-dropout "$classifier_dropout"} --out "$dir/skinweights-any.gcm" \
+    ${average_decay:+--average-decay "$average_decay"} ${classifier_dropout:+--classifier-dropout "$classifier_dropout"} \
+    ${loss:+--loss "$loss"} --out "$dir/skinweights-any.gcm" \
     --keep-best "$dir/skinweights-any.best.gcm" >"$dir/skinweights-any.train.log" 2>&1 \
     || { cat "$dir/skinweights-any.train.log" >&2; die "training on $fold failed"; }
   log "$fold: $(tail -n 1 "$dir/skinweights-any.train.log")"

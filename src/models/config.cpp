@@ -12,6 +12,7 @@ namespace gatcore::models {
 
 const char* task_name(Task t) { return t == Task::weights ? "weights" : "displacement"; }
 const char* displacement_loss_name(DisplacementLoss l) { return l == DisplacementLoss::l1 ? "l1" : "mse"; }
+const char* weight_loss_name(WeightLoss l) { return l == WeightLoss::l1 ? "l1" : "kl"; }
 
 ModelKind ModelConfig::kind() const { return model_kind_from_name(name); }
 
@@ -37,6 +38,9 @@ ModelConfig ModelConfig::defaults(const std::string& name, std::int64_t in_dim, 
     c.logit_prior = true;
     c.prior_weight_limit = true;
     c.prior_straight_chains = true;
+    // Trained to the figure it is judged by: across families the KL-trained
+    // model spread weight over every plausible bone (docs/experiments/skin-weights.md).
+    c.weight_loss = WeightLoss::l1;
   }
   if (out_dim > 0) c.out_dim = out_dim;
   return c;
@@ -136,6 +140,12 @@ const std::vector<Field>& fields() {
        [](ModelConfig& c, const std::string& v) {
          if (v != "mse" && v != "l1") return false;
          c.loss = v == "l1" ? DisplacementLoss::l1 : DisplacementLoss::mse;
+         return true;
+       }},
+      {"weight_loss", [](const ModelConfig& c) { return std::string(weight_loss_name(c.weight_loss)); },
+       [](ModelConfig& c, const std::string& v) {
+         if (v != "kl" && v != "l1") return false;
+         c.weight_loss = v == "l1" ? WeightLoss::l1 : WeightLoss::kl;
          return true;
        }},
       int_field("in_dim", &ModelConfig::in_dim),

@@ -75,12 +75,14 @@ Tensor top_k_renormalise(const Tensor& w, int k) {
 }
 
 Var task_loss(const ModelConfig& cfg, const Var& pred, const Tensor& target) {
-  if (cfg.task == Task::weights) return kl_div_loss(pred, target);
-  if (cfg.loss == DisplacementLoss::mse) return mse_loss(pred, target);
+  if (cfg.task == Task::weights && cfg.weight_loss == WeightLoss::kl) return kl_div_loss(pred, target);
+  if (cfg.task == Task::displacement && cfg.loss == DisplacementLoss::mse) return mse_loss(pred, target);
   // |d| = relu(d) + relu(-d), from ops every backend has.
   check_shape(target, pred.rows(), pred.cols(), "l1 loss target");
   const Var d = sub(pred, Var(target));
-  return mean(add(activation(Activation::relu, d), activation(Activation::relu, scale(d, -1.0f))));
+  const Var l1 = mean(add(activation(Activation::relu, d), activation(Activation::relu, scale(d, -1.0f))));
+  // Weights: the sum over a vertex's bones (the L1 gat eval reports), mean over vertices.
+  return cfg.task == Task::weights ? scale(l1, float(pred.cols())) : l1;
 }
 
 }  // namespace gatcore::models

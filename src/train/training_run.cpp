@@ -89,8 +89,10 @@ std::string check_new_model_options(const ModelConfig& cfg, const RunRequest& r)
   if (r.classifier_dropout >= 0 && !models::has_neuroskinning_classifier(kind))
     return "--classifier-dropout applies to the NeuroSkinning family (neuroskinning, neuroskinning-nopool, "
            "skinweights-any), not " + cfg.name;
-  if (!r.loss.empty() && cfg.task == Task::weights)
-    return "--loss applies to displacement models; " + cfg.name + " learns skin weights (KL)";
+  if (!r.loss.empty() && cfg.task == Task::weights && r.loss != "kl" && r.loss != "l1")
+    return "--loss " + r.loss + ": " + cfg.name + " learns skin weights, whose loss is kl or l1";
+  if (!r.loss.empty() && cfg.task == Task::displacement && r.loss != "mse" && r.loss != "l1")
+    return "--loss " + r.loss + ": " + cfg.name + " learns displacements, whose loss is mse or l1";
   if (r.linear_skip && (!models::predicts_displacement(kind) || cfg.task != Task::displacement))
     return "--linear-skip applies to displacement models (the densegats family, origat), not " + cfg.name;
   return "";
@@ -99,16 +101,20 @@ std::string check_new_model_options(const ModelConfig& cfg, const RunRequest& r)
 void apply_architecture_options(ModelConfig& cfg, const RunRequest& r) {
   if (models::any_skeleton(cfg.kind())) cfg.pair_scorer = r.pair_scorer;
   if (r.classifier_dropout >= 0) cfg.classifier_dropout = r.classifier_dropout;
-  if (!r.loss.empty()) cfg.loss = r.loss == "l1" ? models::DisplacementLoss::l1 : models::DisplacementLoss::mse;
+  if (!r.loss.empty() && cfg.task == Task::weights)
+    cfg.weight_loss = r.loss == "l1" ? models::WeightLoss::l1 : models::WeightLoss::kl;
+  else if (!r.loss.empty())
+    cfg.loss = r.loss == "l1" ? models::DisplacementLoss::l1 : models::DisplacementLoss::mse;
   if (r.linear_skip) cfg.linear_skip = true;
 }
 
 std::string check_checkpoint_architecture(const ModelConfig& cfg, const RunRequest& r) {
   if (r.linear_skip && !cfg.linear_skip)
     return r.resume + " was trained without --linear-skip; a resumed run keeps its architecture";
-  if (!r.resume.empty() && !r.loss.empty() && r.loss != models::displacement_loss_name(cfg.loss))
-    return r.resume + " was trained with the " + models::displacement_loss_name(cfg.loss) +
-           " loss; a resumed run keeps it (drop --loss " + r.loss + ")";
+  const std::string loss = cfg.task == Task::weights ? models::weight_loss_name(cfg.weight_loss)
+                                                     : models::displacement_loss_name(cfg.loss);
+  if (!r.resume.empty() && !r.loss.empty() && r.loss != loss)
+    return r.resume + " was trained with the " + loss + " loss; a resumed run keeps it (drop --loss " + r.loss + ")";
   if (!r.resume.empty() && !r.pair_scorer.empty() && r.pair_scorer != cfg.pair_scorer)
     return r.resume + " has " + (cfg.pair_scorer.empty() ? "no pair scorer" : "another pair scorer") +
            "; a resumed run keeps its architecture (drop --pair-scorer)";

@@ -100,9 +100,11 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "displacement is DenseGATs' comparison)")
       ->check(one_of({"weights", "displacement"}));
   c.add_option("--loss", a->loss,
-               "displacement loss: mse (default, the paper) or l1 (mean absolute error: keeps LBS where unsure; "
-               "closer to the mean vertex error gat eval reports)")
-      ->check(one_of({"mse", "l1"}));
+               "displacement models: mse (the paper's) or l1 (mean absolute error: keeps LBS where unsure; closer to "
+               "the mean vertex error gat eval reports). Skin-weight models: kl (NeuroSkinning's) or l1 (the L1 over a "
+               "vertex's bones gat eval reports: keeps the likely bones where unsure instead of spreading weight). "
+               "Default: the model's (l1 for skinweights-any, kl for the NeuroSkinning models, mse otherwise)")
+      ->check(one_of({"mse", "l1", "kl"}));
   c.add_flag("--linear-skip", a->linear_skip,
              "displacement models (densegats family, origat): add a per-vertex linear map of the input columns to the output, set to the "
              "least-squares fit of the training targets before the first epoch (the graph network learns the "
@@ -396,7 +398,7 @@ int run_train(TrainArgs a) {
   const std::string source = td ? "dataset " + data + " (" + std::to_string(td->super.num_bones()) + " bones)"
                                 : std::string("embedded tube data");
   const std::string task_text = cfg.task == Task::weights
-                                    ? std::string("weights, KL loss")
+                                    ? std::string("weights, ") + weight_loss_name(cfg.weight_loss) + " loss"
                                     : std::string("displacement, ") + displacement_loss_name(cfg.loss) + " loss";
   if (root)
     std::printf("gat train: %s (%s), %lld parameters, %s: %zu training / %zu validation samples, "

@@ -10,7 +10,7 @@
 
 namespace gatcore::models {
 
-enum class Task { displacement, weights };  // MSE on [n,3] offsets / KL on [n,|B|] skin weights
+enum class Task { displacement, weights };  // offsets [n, 3] / skin weights [n, |B|] (the losses below)
 const char* task_name(Task t);
 // The displacement loss: MSE (the DenseGATs paper) or L1 (mean absolute
 // offset error: seeks the median, so where the network is unsure it keeps
@@ -18,11 +18,20 @@ const char* task_name(Task t);
 // per-vertex error the evaluation reports).
 enum class DisplacementLoss { mse, l1 };
 const char* displacement_loss_name(DisplacementLoss l);
+// The skin-weight loss: KL(target || prediction) per vertex (NeuroSkinning),
+// or L1, the sum over a vertex's bones of |prediction - target|: the figure
+// users judge weights by. KL punishes a faint weight missed on one of the
+// artist's bones far more than weight put on the wrong bone, so where a
+// network is unsure it spreads weight over every plausible bone; L1 costs
+// both alike, so it keeps the likely bones and leaves the rest at 0.
+enum class WeightLoss { kl, l1 };
+const char* weight_loss_name(WeightLoss l);
 
 struct ModelConfig {
   std::string name = "densegats";  // a ModelKind's name (model_kind_name); kind() reads it
   Task task = Task::displacement;
-  DisplacementLoss loss = DisplacementLoss::mse;  // displacement task only (weights: KL)
+  DisplacementLoss loss = DisplacementLoss::mse;  // displacement task only
+  WeightLoss weight_loss = WeightLoss::kl;         // weights task only (a config without the key: kl)
   std::int64_t in_dim = 0;   // node feature width (required)
   std::int64_t out_dim = 3;  // 3 for displacements, |B| (super skeleton) for weights
   bool batch_norm = true;

@@ -81,8 +81,10 @@ std::unique_ptr<Model> make_model(const ModelConfig& cfg, std::uint64_t seed);
 Var masked_softmax(const Var& logits, const Tensor& mask);
 // Keeps the k largest weights of each row, zeroes the rest, renormalises.
 Tensor top_k_renormalise(const Tensor& weights, int k);
-// The task's training loss: displacements MSE (or L1: cfg.loss), skin
-// weights KL(target || prediction).
+// The task's training loss: displacements MSE or L1 per coordinate
+// (cfg.loss), mean over rows and columns; skin weights KL(target ||
+// prediction) or the L1 over each vertex's bones (cfg.weight_loss), mean
+// over vertices.
 Var task_loss(const ModelConfig& cfg, const Var& pred, const Tensor& target);
 
 }  // namespace gatcore::models

@@ -23,7 +23,7 @@ struct RunRequest {
   std::string resume;  // a checkpoint to continue
   std::string init;    // a checkpoint to fine-tune from (not with resume)
   std::string data;    // the dataset; empty: the embedded tube data
-  std::string loss;    // mse | l1
+  std::string loss;    // displacement models: mse | l1; skin-weight models: kl | l1
   bool linear_skip = false;
   std::vector<std::int64_t> pair_scorer;
   float classifier_dropout = -1;                // < 0: not given
