@@ -41,7 +41,7 @@
 # validated every epoch). The test characters see the epoch of the lowest
 # validation L1 of the top-4 weights (gat train --keep-best, whose default
 # for skin-weight models is --keep-best-by l1), not of the lowest validation
-# loss: the training loss (cross-entropy over each vertex's candidate bones)
+# loss: the training loss (over each vertex's candidate bones, before the top-4 cut)
 # stops tracking the weights' L1 late in training (docs/experiments/skin-weights.md,
 # "Which checkpoint to evaluate"). The chosen checkpoint is also evaluated on
 # the validation characters by gat eval, and both figures are logged.

@@ -180,8 +180,8 @@ gat::Runner gat::setup_train(CLI::App& gat) {
                "history's best)");
   c.add_option("--keep-best-by", a->keep_best_by,
                "what --keep-best minimises: the validation loss, or (skin-weight models) the validation L1 of the "
-               "top-4 weights, what users judge weights by (the loss, a divergence over the candidate bones, can keep "
-               "falling while the weights get worse). Default: l1 for skin-weight models, loss otherwise")
+               "top-4 weights, what users judge weights by (the loss, over every candidate bone before the top-4 cut, "
+               "can keep falling while the weights get worse). Default: l1 for skin-weight models, loss otherwise")
       ->check(CLI::IsMember({"loss", "l1"}));
   c.add_option("--sampling", a->sampling,
                "which vertices of a character a training sample takes: random (NeuroSkinning's), consecutive "
