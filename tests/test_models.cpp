@@ -144,7 +144,7 @@ TEST_CASE("skin-weight losses: KL for the NeuroSkinning models, L1 over each ver
   c.weight_loss = WeightLoss::l1;
   CHECK(ModelConfig::from_text(c.to_text()).weight_loss == WeightLoss::l1);
   CHECK_THROWS_WITH(ModelConfig::from_text("weight_loss = mse\n"), Catch::Contains("bad value 'mse' for 'weight_loss'"));
-  // Rows of a softmax against rows of a target distribution, one vertex with a masked (zero) column.
+  // Rows of a softmax against rows of a target distribution.
   std::mt19937 rng(5);
   Tensor logits = gradcheck::random_tensor(6, 4, rng), target = Tensor::zeros(6, 4);
   for (std::int64_t i = 0; i < 6; ++i) {
