@@ -591,6 +591,9 @@ TEST_CASE("ASF/AMC: units, axes, partial dofs and clear errors", "[character][as
   CHECK_THROWS_WITH(parse_asf_amc(asf, "s.asf", ":FULLY-SPECIFIED\nlfemur 1 2 3\n", "m.amc"),
                     Contains("before the first frame number"));
   CHECK_THROWS_WITH(parse_asf_amc(asf, "s.asf", ":FULLY-SPECIFIED\n", "m.amc"), Contains("no frames"));
+  // A frame number past 2^63 - 1 (strtoll saturates it; the next frame's check would overflow).
+  CHECK_THROWS_WITH(parse_asf_amc(asf, "s.asf", ":DEGREES\n" + std::string(40, '1') + "\nroot 0 0 0 0 0 0\n2\n", "m.amc"),
+                    Contains("m.amc: line 2") && Contains("is out of range"));
   // A bone missing from a frame keeps its previous values.
   const std::string sparse = ":DEGREES\n1\nroot 0 0.45 0 0 0 0\nltibia 45 0 0\n2\nroot 0 0.45 0 0 0 0\n";
   const Motion sp = parse_asf_amc(asf, "s.asf", sparse, "sparse.amc");

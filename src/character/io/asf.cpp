@@ -7,6 +7,7 @@
 // relative to the rest is C M C^-1. A joint per bone sits where the bone
 // starts (its parent's end: the parent's length along its direction).
 // Rotation orders name the order of application: "XYZ" is Rz Ry Rx.
+#include <cerrno>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -481,12 +482,14 @@ Motion parse_asf_amc(std::string_view asf_text, const std::string& asf_path, std
     if (ln.words.size() == 1 && std::isdigit(static_cast<unsigned char>(w0[0]))) {
       char* end = nullptr;
       const std::string n(w0);
+      errno = 0;
       const long long f = std::strtoll(n.c_str(), &end, 10);
       if (*end != '\0' || f < 0) ln.fail(detail::cat("frame number '", w0, "' is not a whole number"));
+      if (errno == ERANGE) ln.fail(detail::cat("frame number '", w0, "' is out of range"));
       if (in_frame) emit();
       if (m.clip.frames.size() >= std::size_t(kMaxClipJointSamples) / std::max<std::size_t>(1, J))
         ln.fail(detail::cat("more than ", kMaxClipJointSamples / std::int64_t(std::max<std::size_t>(1, J)), " frames"));
-      if (in_frame && f != frame_number + 1)
+      if (in_frame && f - 1 != frame_number)  // f >= 0: f - 1 cannot overflow
         report_warning(warn, detail::cat(amc_path, ": line ", ln.line, ": frame ", f, " follows frame ", frame_number,
                                          " (read in file order)"));
       frame_number = f;
