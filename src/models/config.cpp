@@ -13,6 +13,9 @@ namespace gatcore::models {
 const char* task_name(Task t) { return t == Task::weights ? "weights" : "displacement"; }
 const char* displacement_loss_name(DisplacementLoss l) { return l == DisplacementLoss::l1 ? "l1" : "mse"; }
 const char* weight_loss_name(WeightLoss l) { return l == WeightLoss::l1 ? "l1" : "kl"; }
+const char* loss_name(const ModelConfig& c) {
+  return c.task == Task::weights ? weight_loss_name(c.weight_loss) : displacement_loss_name(c.loss);
+}
 
 ModelKind ModelConfig::kind() const { return model_kind_from_name(name); }
 

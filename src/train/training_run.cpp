@@ -111,8 +111,7 @@ void apply_architecture_options(ModelConfig& cfg, const RunRequest& r) {
 std::string check_checkpoint_architecture(const ModelConfig& cfg, const RunRequest& r) {
   if (r.linear_skip && !cfg.linear_skip)
     return r.resume + " was trained without --linear-skip; a resumed run keeps its architecture";
-  const std::string loss = cfg.task == Task::weights ? models::weight_loss_name(cfg.weight_loss)
-                                                     : models::displacement_loss_name(cfg.loss);
+  const std::string loss = models::loss_name(cfg);
   if (!r.resume.empty() && !r.loss.empty() && r.loss != loss)
     return r.resume + " was trained with the " + loss + " loss; a resumed run keeps it (drop --loss " + r.loss + ")";
   if (!r.resume.empty() && !r.pair_scorer.empty() && r.pair_scorer != cfg.pair_scorer)

@@ -248,8 +248,7 @@ int run_eval(const EvalArgs& a) {
     std::printf("gat eval: %s (%s) from %s on %zu samples of the %s characters of %s, device %s\n", cfg.name.c_str(),
                 task_name(cfg.task), path.c_str(), data_.size(), part.c_str(), data.c_str(), device_label.c_str());
   const double loss = t.evaluate(data_);
-  std::printf("  loss (%s, normalised targets): %.6f\n",
-              cfg.task == Task::weights ? weight_loss_name(cfg.weight_loss) : displacement_loss_name(cfg.loss), loss);
+  std::printf("  loss (%s, normalised targets): %.6f\n", loss_name(cfg), loss);
   // Per sample: error sum, max, LBS-alone sum, vertices, true / false positives, false negatives.
   constexpr std::size_t kStats = 7;
   std::vector<double> stats(data_.size() * kStats, 0.0);

@@ -397,9 +397,7 @@ int run_train(TrainArgs a) {
 
   const std::string source = td ? "dataset " + data + " (" + std::to_string(td->super.num_bones()) + " bones)"
                                 : std::string("embedded tube data");
-  const std::string task_text = cfg.task == Task::weights
-                                    ? std::string("weights, ") + weight_loss_name(cfg.weight_loss) + " loss"
-                                    : std::string("displacement, ") + displacement_loss_name(cfg.loss) + " loss";
+  const std::string task_text = std::string(task_name(cfg.task)) + ", " + loss_name(cfg) + " loss";
   if (root)
     std::printf("gat train: %s (%s), %lld parameters, %s: %zu training / %zu validation samples, "
                 "batch %d, %d threads, device %s%s%s\n",

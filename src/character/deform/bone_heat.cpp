@@ -4,11 +4,11 @@
 #include "gatcore/character/rig/bone_axis.hpp"
 
 #include <algorithm>
-#include <string>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <string>
 #include <unordered_map>
 
 #include <Eigen/Sparse>
