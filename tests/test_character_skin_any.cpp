@@ -52,6 +52,10 @@ models::ModelConfig small_any_config(int k) {
   cfg.gc_dims = {8, 8, 8};
   cfg.global_mlp = {16};
   cfg.classifier = {16};
+  // What the network computes, without the default's dropout: a random mask
+  // per forward pass would change the function between a finite difference's
+  // two evaluations. The dropout test below turns it on.
+  cfg.classifier_dropout = 0.0f;
   return cfg;
 }
 
@@ -202,6 +206,7 @@ TEST_CASE("finite-difference gradients through a reduced skinweights-any, two bo
   cfg.gc_pool = {0, 0};  // no geodesic pooling (skinweights-any)
   cfg.global_mlp = {8};
   cfg.classifier = {8};
+  cfg.classifier_dropout = 0.0f;  // one function for both evaluations of a finite difference
   const bool shared = GENERATE(false, true);  // the shared pair scorer: 2 hidden layers, every slot
   if (shared) {
     cfg.pair_scorer = {6, 5};

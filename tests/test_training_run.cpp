@@ -110,11 +110,12 @@ TEST_CASE("training run: each option applies to the models it names") {
   r.pair_scorer = {16, 8};
   apply_architecture_options(any, r);
   CHECK(any.pair_scorer == std::vector<std::int64_t>{16, 8});
-  CHECK(any.classifier_dropout == 0.0f);  // not asked: the paper's network
+  CHECK(any.classifier_dropout == 0.5f);                            // not asked: the model's default
+  CHECK(config("neuroskinning").classifier_dropout == 0.0f);        // the paper's network
 
   r = {};
   r.data = "d.json";
-  r.classifier_dropout = 0.5f;
+  r.classifier_dropout = 0.25f;
   for (const char* name : {"neuroskinning", "neuroskinning-nopool", "skinweights-any"})
     CHECK(check_new_model_options(config(name), r).empty());
   for (const char* name : {"densegats", "fc", "pointnet"})
@@ -122,7 +123,10 @@ TEST_CASE("training run: each option applies to the models it names") {
           std::string("--classifier-dropout applies to the NeuroSkinning family (neuroskinning, neuroskinning-nopool, "
                       "skinweights-any), not ") + name);
   apply_architecture_options(any, r);
-  CHECK(any.classifier_dropout == 0.5f);
+  CHECK(any.classifier_dropout == 0.25f);
+  r.classifier_dropout = 0.0f;  // asked for none: the model without dropout
+  apply_architecture_options(any, r);
+  CHECK(any.classifier_dropout == 0.0f);
 }
 
 TEST_CASE("training run: a checkpoint's model keeps its architecture") {
