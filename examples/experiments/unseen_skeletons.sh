@@ -70,7 +70,8 @@
 # train --lr-schedule; cosine anneals from the initial rate over the fold's
 # --minutes); without it, the model's default.
 # --classifier-dropout P trains skinweights-any with dropout P after each of
-# its classifier's hidden layers (gat train --classifier-dropout).
+# its classifier's hidden layers (gat train --classifier-dropout; 0: none);
+# without it, the model's default (0.5).
 # --loss trains skinweights-any with that skin-weight loss (gat train --loss
 # kl|l1); without it, the model's default.
 # --average-decay D trains skinweights-any with a moving average of its
