@@ -166,7 +166,8 @@ gat::Runner gat::setup_train(CLI::App& gat) {
   c.add_option("--classifier-dropout", a->classifier_dropout,
                "the NeuroSkinning family (neuroskinning, skinweights-any): drop each hidden unit of the classifier "
                "with probability P while training (e.g. 0.5), a regulariser against learning the training "
-               "families' conventions; recorded in the checkpoint's configuration (default: skinweights-any 0.5, the NeuroSkinning models 0, the paper)")
+               "families' conventions; recorded in the checkpoint's configuration (default: skinweights-any 0.5, "
+               "the NeuroSkinning models 0, the paper)")
       ->check(CLI::Range(0.0, 0.95));
   c.add_option("--world-columns", a->world_columns,
                "skinweights-any: the vertex's world-frame rest position and normal, the only inputs not measured "

@@ -26,9 +26,6 @@ const char* displacement_loss_name(DisplacementLoss l);
 // both alike, so it keeps the likely bones and leaves the rest at 0.
 enum class WeightLoss { kl, l1 };
 const char* weight_loss_name(WeightLoss l);
-struct ModelConfig;
-// The name of the loss the model trains with: its task's (cfg.loss or cfg.weight_loss).
-const char* loss_name(const ModelConfig& cfg);
 
 struct ModelConfig {
   std::string name = "densegats";  // a ModelKind's name (model_kind_name); kind() reads it
@@ -110,5 +107,8 @@ struct ModelConfig {
   static ModelConfig from_text(const std::string& text);
   bool operator==(const ModelConfig&) const = default;
 };
+
+// The name of the loss the model trains with: its task's (cfg.loss or cfg.weight_loss).
+const char* loss_name(const ModelConfig& cfg);
 
 }  // namespace gatcore::models

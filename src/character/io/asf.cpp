@@ -7,8 +7,8 @@
 // relative to the rest is C M C^-1. A joint per bone sits where the bone
 // starts (its parent's end: the parent's length along its direction).
 // Rotation orders name the order of application: "XYZ" is Rz Ry Rx.
-#include <cerrno>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
