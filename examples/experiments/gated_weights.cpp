@@ -1,0 +1,123 @@
+// A confidence gate between skinweights-any and bone heat, measured before it
+// goes in the library (docs/experiments/skin-weights.md):
+//   gated_weights DATASET.json MODEL.gcm
+// Where the model's largest candidate probability at a vertex is below a
+// threshold, the vertex takes bone heat's weights instead of the model's; the
+// threshold, the heat blend and the min weight are chosen together on the
+// dataset's validation characters (gat calibrate's grid for the last two),
+// then the test characters are scored with gat eval's metric.
+#include <algorithm>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "gatcore/character/data/bone_candidate_samples.hpp"
+#include "gatcore/character/data/training_data.hpp"
+#include "gatcore/character/deform/bone_heat.hpp"
+#include "gatcore/character/eval/weight_calibration.hpp"
+#include "gatcore/character/eval/weight_eval.hpp"
+#include "gatcore/character/features/bone_candidates.hpp"
+#include "gatcore/character/rig/blend_weights.hpp"
+#include "gatcore/character/rig/limit_weights.hpp"
+#include "gatcore/character/rig/super_skeleton.hpp"
+#include "gatcore/models/checkpoint.hpp"
+#include "gatcore/models/model.hpp"
+#include "gatcore/models/predict.hpp"
+#include "gatcore/models/sample.hpp"
+
+using namespace gatcore;
+using namespace gatcore::character;
+
+// Rows of `a`, except where `take_b` is set: rows of `b`.
+static SkinWeights select_rows(const SkinWeights& a, const SkinWeights& b, const std::vector<char>& take_b) {
+  SkinWeights out;
+  out.ptr.assign(1, 0);
+  for (std::size_t v = 0; v + 1 < a.ptr.size(); ++v) {
+    const SkinWeights& s = take_b[v] ? b : a;
+    for (std::int64_t i = s.ptr[v]; i < s.ptr[v + 1]; ++i)
+      out.joint.push_back(s.joint[std::size_t(i)]), out.weight.push_back(s.weight[std::size_t(i)]);
+    out.ptr.push_back(std::int64_t(out.joint.size()));
+  }
+  return out;
+}
+
+int main(int argc, char** argv) {
+  if (argc != 3) { std::fprintf(stderr, "usage: %s dataset.json model.gcm\n", argv[0]); return 2; }
+  const TrainingData td = load_training_data(argv[1]);
+  models::LoadedModel m = models::load_checkpoint(argv[2]);
+  m.model->fold_batch_norm();
+  const int k = int(m.model->config().out_dim);
+  const BoneHeatParams prior = prior_bone_heat(m.model->config());
+  const std::int32_t B = td.super.num_bones();
+  const CalibrationGrid grid;
+  const std::vector<float>&mins = grid.min_weights, &blends = grid.heat_blends;
+  const std::vector<float> gates{0.0f, 0.3f, 0.4f, 0.5f, 0.6f, 0.7f, 0.8f, 0.9f, 1.01f};
+  const std::size_t G = gates.size() * blends.size() * mins.size();
+  auto run_part = [&](DatasetPart part, std::vector<double>& l1, std::vector<double>& dom, std::vector<double>& gated,
+                      std::vector<std::vector<double>>* per_char) {
+    const auto& chars = td.part(part);
+    l1.assign(G, 0.0), dom.assign(G, 0.0), gated.assign(gates.size(), 0.0);
+    for (const std::int32_t ci : chars) {
+      const PreparedCharacter& pc = td.characters[std::size_t(ci)];
+      const auto& j2b = td.super.joint_to_bone[std::size_t(ci)];
+      const auto& mask = td.super.mask[std::size_t(ci)];
+      BoneCandidates c;
+      const models::Sample sample = bone_candidate_sample(pc, k, prior, &c);
+      const Tensor y = models::predict(*m.model, sample, m.norm, 0);
+      const SkinWeights top = weights_from_candidates(c, models::top_k_renormalise(y, 4));
+      BoneHeatParams bp;
+      const SkinWeights heat = bone_heat_weights(pc.character, bp);
+      const std::vector<float> truth = super_weights(pc.character.mesh.weights, j2b, B);
+      WeightEvalOptions eo;
+      eo.poses = 0;
+      std::vector<double> row(G, 0.0);
+      for (std::size_t gi = 0; gi < gates.size(); ++gi) {
+        std::vector<char> take(std::size_t(y.rows()), 0);
+        std::size_t n = 0;
+        for (std::int64_t v = 0; v < y.rows(); ++v) {
+          float mx = 0;
+          for (std::int64_t j = 0; j < y.cols(); ++j) mx = std::max(mx, y.at(v, j));
+          if (mx < gates[gi]) take[std::size_t(v)] = 1, ++n;
+        }
+        gated[gi] += double(n) / double(y.rows()) / double(chars.size());
+        const SkinWeights sel = select_rows(top, heat, take);
+        for (std::size_t h = 0; h < blends.size(); ++h) {
+          const SkinWeights mixed = blends[h] > 0 ? blend_weights(sel, heat, blends[h], 4) : sel;
+          const std::vector<float> pred = super_weights(mixed, j2b, B);
+          for (std::size_t mi = 0; mi < mins.size(); ++mi) {
+            eo.min_weight = mins[mi];
+            const auto r = evaluate_character_weights(pc, pred, truth, B, j2b, mask, eo, ci);
+            const std::size_t g = (gi * blends.size() + h) * mins.size() + mi;
+            l1[g] += r.weights.l1_mean / double(chars.size());
+            dom[g] += r.dominant / double(chars.size());
+            row[g] = r.weights.l1_mean;
+          }
+        }
+      }
+      if (per_char) per_char->push_back(row);
+      std::fprintf(stderr, ".");
+    }
+  };
+  std::vector<double> vl1, vdom, vg, tl1, tdom, tg;
+  std::vector<std::vector<double>> tchar;
+  run_part(DatasetPart::validation, vl1, vdom, vg, nullptr);
+  run_part(DatasetPart::test, tl1, tdom, tg, &tchar);
+  std::fprintf(stderr, "\n");
+  const std::size_t per_gate = blends.size() * mins.size();
+  std::size_t best = 0, best0 = 0;
+  for (std::size_t g = 0; g < G; ++g) if (vl1[g] < vl1[best]) best = g;
+  for (std::size_t g = 0; g < per_gate; ++g) if (vl1[g] < vl1[best0]) best0 = g;
+  std::printf("chosen: gate %.2f blend %.2g min %.3g: val %.4f test %.4f dom %.3f | no gate: val %.4f test %.4f dom %.3f\n",
+              double(gates[best / per_gate]), double(blends[(best % per_gate) / mins.size()]),
+              double(mins[best % mins.size()]), vl1[best], tl1[best], tdom[best], vl1[best0], tl1[best0], tdom[best0]);
+  std::printf("per gate (best blend/min on validation): gate val-share test-share val test dom\n");
+  for (std::size_t gi = 0; gi < gates.size(); ++gi) {
+    std::size_t b = gi * per_gate;
+    for (std::size_t g = gi * per_gate; g < (gi + 1) * per_gate; ++g) if (vl1[g] < vl1[b]) b = g;
+    std::printf("  %.2f %.3f %.3f %.4f %.4f %.3f\n", double(gates[gi]), vg[gi], tg[gi], vl1[b], tl1[b], tdom[b]);
+  }
+  std::printf("test per character at chosen / no gate:");
+  for (const auto& r : tchar) std::printf(" %.3f/%.3f", r[best], r[best0]);
+  std::printf("\n");
+  return 0;
+}
