@@ -113,6 +113,9 @@ TEST_CASE("weight calibration: bad grids and empty parts are refused") {
   empty.description.split.validation.clear();
   CHECK_THROWS_WITH(calibrate_weight_postprocess(empty, DatasetPart::validation, *model, norm),
                     Catch::Contains("validation part is empty"));
+  const auto n = static_cast<std::int32_t>(td.characters.size());
+  CHECK_THROWS_WITH(score_postprocess_grid(td, n, SkinWeights{}, SkinWeights{}, CalibrationGrid{}),
+                    Catch::Contains("character " + std::to_string(n) + " of"));
 }
 
 TEST_CASE("weight calibration: the checkpoint records it, keeps its tensors, and the runtime applies it") {

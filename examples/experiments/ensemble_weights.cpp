@@ -85,7 +85,6 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: its candidates or bone-heat prior differ from %s's\n", argv[i + 2], argv[2]);
       return 2;
     }
-  const std::int32_t B = td.super.num_bones();
   const CalibrationGrid grid;  // gat calibrate's
   const std::vector<float>&mins = grid.min_weights, &blends = grid.heat_blends;
   // > 0: smoothing iterations; < 0: sharpening, each vertex's candidate
@@ -100,8 +99,6 @@ int main(int argc, char** argv) {
     dom = l1;
     for (const std::int32_t ci : chars) {
       const PreparedCharacter& pc = td.characters[std::size_t(ci)];
-      const auto& j2b = td.super.joint_to_bone[std::size_t(ci)];
-      const auto& mask = td.super.mask[std::size_t(ci)];
       BoneCandidates c;
       const models::Sample sample = bone_candidate_sample(pc, k, heat, &c);
       std::vector<Tensor> ys;
@@ -115,9 +112,6 @@ int main(int argc, char** argv) {
       ys.push_back(avg);
       BoneHeatParams bp;
       const SkinWeights heat = bone_heat_weights(pc.character, bp);
-      const std::vector<float> truth = super_weights(pc.character.mesh.weights, j2b, B);
-      WeightEvalOptions eo;
-      eo.poses = 0;
       for (int v = 0; v <= M; ++v) {
         const SkinWeights full = weights_from_candidates(c, ys[v]);
         for (std::size_t si = 0; si < smooths.size(); ++si) {
@@ -137,16 +131,11 @@ int main(int argc, char** argv) {
             }
             top = weights_from_candidates(c, models::top_k_renormalise(y, 4));
           }
-          for (std::size_t h = 0; h < blends.size(); ++h) {
-            const SkinWeights mixed = blends[h] > 0 ? blend_weights(top, heat, blends[h], 4) : top;
-            const std::vector<float> pred = super_weights(mixed, j2b, B);
-            for (std::size_t mi = 0; mi < mins.size(); ++mi) {
-              eo.min_weight = mins[mi];
-              const auto r = evaluate_character_weights(pc, pred, truth, B, j2b, mask, eo, ci);
-              const std::size_t gi = (si * blends.size() + h) * mins.size() + mi;
-              l1[v][gi] += r.weights.l1_mean / double(chars.size());
-              dom[v][gi] += r.dominant / double(chars.size());
-            }
+          const std::vector<CalibrationPoint> points = score_postprocess_grid(td, ci, top, heat, grid);
+          for (std::size_t i = 0; i < points.size(); ++i) {
+            const std::size_t gi = si * points.size() + i;
+            l1[v][gi] += points[i].l1 / double(chars.size());
+            dom[v][gi] += points[i].dominant / double(chars.size());
           }
         }
       }

@@ -48,7 +48,6 @@ int main(int argc, char** argv) {
   m.model->fold_batch_norm();
   const int k = int(m.model->config().out_dim);
   const BoneHeatParams prior = prior_bone_heat(m.model->config());
-  const std::int32_t B = td.super.num_bones();
   const CalibrationGrid grid;
   const std::vector<float>&mins = grid.min_weights, &blends = grid.heat_blends;
   const std::vector<float> gates{0.0f, 0.3f, 0.4f, 0.5f, 0.6f, 0.7f, 0.8f, 0.9f, 1.01f};
@@ -59,17 +58,12 @@ int main(int argc, char** argv) {
     l1.assign(G, 0.0), dom.assign(G, 0.0), gated.assign(gates.size(), 0.0);
     for (const std::int32_t ci : chars) {
       const PreparedCharacter& pc = td.characters[std::size_t(ci)];
-      const auto& j2b = td.super.joint_to_bone[std::size_t(ci)];
-      const auto& mask = td.super.mask[std::size_t(ci)];
       BoneCandidates c;
       const models::Sample sample = bone_candidate_sample(pc, k, prior, &c);
       const Tensor y = models::predict(*m.model, sample, m.norm, 0);
       const SkinWeights top = weights_from_candidates(c, models::top_k_renormalise(y, 4));
       BoneHeatParams bp;
       const SkinWeights heat = bone_heat_weights(pc.character, bp);
-      const std::vector<float> truth = super_weights(pc.character.mesh.weights, j2b, B);
-      WeightEvalOptions eo;
-      eo.poses = 0;
       std::vector<double> row(G, 0.0);
       for (std::size_t gi = 0; gi < gates.size(); ++gi) {
         std::vector<char> take(std::size_t(y.rows()), 0);
@@ -80,18 +74,13 @@ int main(int argc, char** argv) {
           if (mx < gates[gi]) take[std::size_t(v)] = 1, ++n;
         }
         gated[gi] += double(n) / double(y.rows()) / double(chars.size());
-        const SkinWeights sel = select_rows(top, heat, take);
-        for (std::size_t h = 0; h < blends.size(); ++h) {
-          const SkinWeights mixed = blends[h] > 0 ? blend_weights(sel, heat, blends[h], 4) : sel;
-          const std::vector<float> pred = super_weights(mixed, j2b, B);
-          for (std::size_t mi = 0; mi < mins.size(); ++mi) {
-            eo.min_weight = mins[mi];
-            const auto r = evaluate_character_weights(pc, pred, truth, B, j2b, mask, eo, ci);
-            const std::size_t g = (gi * blends.size() + h) * mins.size() + mi;
-            l1[g] += r.weights.l1_mean / double(chars.size());
-            dom[g] += r.dominant / double(chars.size());
-            row[g] = r.weights.l1_mean;
-          }
+        const std::vector<CalibrationPoint> points =
+            score_postprocess_grid(td, ci, select_rows(top, heat, take), heat, grid);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+          const std::size_t g = gi * points.size() + i;
+          l1[g] += points[i].l1 / double(chars.size());
+          dom[g] += points[i].dominant / double(chars.size());
+          row[g] = points[i].l1;
         }
       }
       if (per_char) per_char->push_back(row);

@@ -14,6 +14,31 @@
 
 namespace gatcore::character {
 
+std::vector<CalibrationPoint> score_postprocess_grid(const TrainingData& td, std::int32_t character,
+                                                     const SkinWeights& own, const SkinWeights& heat,
+                                                     const CalibrationGrid& grid, int max_influences) {
+  GATCORE_CHECK(character >= 0 && std::size_t(character) < td.characters.size(), "score_postprocess_grid: character ",
+                character, " of ", td.characters.size());
+  const PreparedCharacter& pc = td.characters[std::size_t(character)];
+  const auto& j2b = td.super.joint_to_bone[std::size_t(character)];
+  const auto& mask = td.super.mask[std::size_t(character)];
+  const std::int32_t B = td.super.num_bones();
+  const std::vector<float> truth = super_weights(pc.character.mesh.weights, j2b, B);
+  WeightEvalOptions eo;
+  eo.poses = 0;  // the L1 and dominant bone only
+  std::vector<CalibrationPoint> out;
+  for (const float share : grid.heat_blends) {
+    const SkinWeights mixed = share > 0.0f ? blend_weights(own, heat, share, max_influences) : own;
+    const std::vector<float> pred = super_weights(mixed, j2b, B);
+    for (const float min_weight : grid.min_weights) {
+      eo.min_weight = min_weight;
+      const CharacterWeightEval r = evaluate_character_weights(pc, pred, truth, B, j2b, mask, eo, character);
+      out.push_back({{min_weight, share}, r.weights.l1_mean, r.dominant});
+    }
+  }
+  return out;
+}
+
 WeightCalibration calibrate_weight_postprocess(const TrainingData& td, DatasetPart part, models::Model& model,
                                                const models::Normaliser& norm, const CalibrationGrid& grid,
                                                int max_influences) {
@@ -34,30 +59,15 @@ WeightCalibration calibrate_weight_postprocess(const TrainingData& td, DatasetPa
 
   const std::size_t H = grid.heat_blends.size(), M = grid.min_weights.size();
   std::vector<double> l1(H * M, 0.0), dominant(H * M, 0.0);
-  const std::int32_t B = td.super.num_bones();
-  WeightEvalOptions eo;
-  eo.poses = 0;  // the L1 and dominant bone only
   for (const std::int32_t c : chars) {
     const PreparedCharacter& pc = td.characters[std::size_t(c)];
-    const auto& j2b = td.super.joint_to_bone[std::size_t(c)];
-    const auto& mask = td.super.mask[std::size_t(c)];
     // The mix's bone heat: the baseline's own settings, as gat eval --heat-blend.
     BoneHeatParams bp;
     bp.max_influences = max_influences;
     const SkinWeights own = predict_skin_weights_any(model, norm, pc, max_influences);
-    const SkinWeights heat = bone_heat_weights(pc.character, bp);
-    const std::vector<float> truth = super_weights(pc.character.mesh.weights, j2b, B);
-    for (std::size_t h = 0; h < H; ++h) {
-      const float share = grid.heat_blends[h];
-      const SkinWeights mixed = share > 0.0f ? blend_weights(own, heat, share, max_influences) : own;
-      const std::vector<float> pred = super_weights(mixed, j2b, B);
-      for (std::size_t m = 0; m < M; ++m) {
-        eo.min_weight = grid.min_weights[m];
-        const CharacterWeightEval r = evaluate_character_weights(pc, pred, truth, B, j2b, mask, eo, c);
-        l1[h * M + m] += r.weights.l1_mean;
-        dominant[h * M + m] += r.dominant;
-      }
-    }
+    const std::vector<CalibrationPoint> points =
+        score_postprocess_grid(td, c, own, bone_heat_weights(pc.character, bp), grid, max_influences);
+    for (std::size_t i = 0; i < H * M; ++i) l1[i] += points[i].l1, dominant[i] += points[i].dominant;
   }
   WeightCalibration out;
   out.characters = int(chars.size());

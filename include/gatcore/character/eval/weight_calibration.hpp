@@ -35,6 +35,15 @@ struct WeightCalibration {
   std::vector<CalibrationPoint> grid;  // heat blends outer, min weights inner
 };
 
+// One character of `td` (its index `character`) at every point of `grid`
+// (heat blends outer, min weights inner): its weights `own` mixed with bone
+// heat's `heat` by the point's heat blend, then cut at its min weight, scored
+// as gat eval scores them (the character's own joints, top max_influences).
+// The grid is taken as given (calibrate_weight_postprocess checks it).
+std::vector<CalibrationPoint> score_postprocess_grid(const TrainingData& td, std::int32_t character,
+                                                     const SkinWeights& own, const SkinWeights& heat,
+                                                     const CalibrationGrid& grid, int max_influences = 4);
+
 // Scores every grid pair on the characters of `part` with a skinweights-any
 // model (its batch norm folded) and its normaliser. The grid's values must lie
 // in [0, 1) (min weights) and [0, 1] (heat blends), and include 0 each, so
