@@ -116,6 +116,14 @@ TEST_CASE("weight calibration: bad grids and empty parts are refused") {
   const auto n = static_cast<std::int32_t>(td.characters.size());
   CHECK_THROWS_WITH(score_postprocess_grid(td, n, SkinWeights{}, SkinWeights{}, CalibrationGrid{}),
                     Catch::Contains("character " + std::to_string(n) + " of"));
+  CHECK_THROWS_WITH(score_postprocess_grid(td, 0, SkinWeights{}, SkinWeights{}, CalibrationGrid{}),
+                    Catch::Contains("the weights have 0"));
+  const SkinWeights own = td.characters[0].character.mesh.weights;
+  g = {};
+  g.heat_blends = {0.0f, 2.0f};
+  CHECK_THROWS_WITH(score_postprocess_grid(td, 0, own, own, g), Catch::Contains("heat blend must be in [0, 1]"));
+  CHECK(score_postprocess_grid(td, 0, own, own, CalibrationGrid{}).size() ==
+        CalibrationGrid{}.heat_blends.size() * CalibrationGrid{}.min_weights.size());
 }
 
 TEST_CASE("weight calibration: the checkpoint records it, keeps its tensors, and the runtime applies it") {

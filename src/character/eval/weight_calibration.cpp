@@ -14,12 +14,29 @@
 
 namespace gatcore::character {
 
+namespace {
+
+void check_grid_values(const CalibrationGrid& grid, int max_influences, const char* what) {
+  for (const float m : grid.min_weights)
+    GATCORE_CHECK(std::isfinite(m) && m >= 0.0f && m < 1.0f, what, ": a min weight must be in [0, 1), got ", m);
+  for (const float h : grid.heat_blends)
+    GATCORE_CHECK(std::isfinite(h) && h >= 0.0f && h <= 1.0f, what, ": a heat blend must be in [0, 1], got ", h);
+  GATCORE_CHECK(max_influences >= 1, what, ": max_influences must be >= 1, got ", max_influences);
+}
+
+}  // namespace
+
 std::vector<CalibrationPoint> score_postprocess_grid(const TrainingData& td, std::int32_t character,
                                                      const SkinWeights& own, const SkinWeights& heat,
                                                      const CalibrationGrid& grid, int max_influences) {
   GATCORE_CHECK(character >= 0 && std::size_t(character) < td.characters.size(), "score_postprocess_grid: character ",
                 character, " of ", td.characters.size());
+  check_grid_values(grid, max_influences, "score_postprocess_grid");
   const PreparedCharacter& pc = td.characters[std::size_t(character)];
+  const std::int64_t n = pc.character.mesh.num_vertices();
+  GATCORE_CHECK(own.num_vertices() == n && heat.num_vertices() == n, "score_postprocess_grid: ",
+                pc.character.name, " has ", n, " vertices; the weights have ", own.num_vertices(),
+                " and bone heat's ", heat.num_vertices());
   const auto& j2b = td.super.joint_to_bone[std::size_t(character)];
   const auto& mask = td.super.mask[std::size_t(character)];
   const std::int32_t B = td.super.num_bones();
@@ -46,13 +63,7 @@ WeightCalibration calibrate_weight_postprocess(const TrainingData& td, DatasetPa
   GATCORE_CHECK(has_zero(grid.min_weights) && has_zero(grid.heat_blends),
                 "calibrate_weight_postprocess: the grid must include min weight 0 and heat blend 0 (the model's own "
                 "weights)");
-  for (const float m : grid.min_weights)
-    GATCORE_CHECK(std::isfinite(m) && m >= 0.0f && m < 1.0f,
-                  "calibrate_weight_postprocess: a min weight must be in [0, 1), got ", m);
-  for (const float h : grid.heat_blends)
-    GATCORE_CHECK(std::isfinite(h) && h >= 0.0f && h <= 1.0f,
-                  "calibrate_weight_postprocess: a heat blend must be in [0, 1], got ", h);
-  GATCORE_CHECK(max_influences >= 1, "calibrate_weight_postprocess: max_influences must be >= 1, got ", max_influences);
+  check_grid_values(grid, max_influences, "calibrate_weight_postprocess");
   const std::vector<std::int32_t>& chars = td.part(part);
   GATCORE_CHECK(!chars.empty(), td.path, ": no characters to calibrate on (the ", dataset_part_name(part),
                 " part is empty)");

@@ -39,7 +39,8 @@ struct WeightCalibration {
 // (heat blends outer, min weights inner): its weights `own` mixed with bone
 // heat's `heat` by the point's heat blend, then cut at its min weight, scored
 // as gat eval scores them (the character's own joints, top max_influences).
-// The grid is taken as given (calibrate_weight_postprocess checks it).
+// Throws InvalidArgument for a character out of range, weights of another
+// vertex count, or a grid value out of range (as calibrate_weight_postprocess).
 std::vector<CalibrationPoint> score_postprocess_grid(const TrainingData& td, std::int32_t character,
                                                      const SkinWeights& own, const SkinWeights& heat,
                                                      const CalibrationGrid& grid, int max_influences = 4);
