@@ -12,18 +12,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <string>
 #include <vector>
 
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/eval/weight_calibration.hpp"
-#include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
-#include "gatcore/character/rig/blend_weights.hpp"
 #include "gatcore/character/rig/limit_weights.hpp"
-#include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/graph.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/model.hpp"

@@ -8,18 +8,13 @@
 // then the test characters are scored with gat eval's metric.
 #include <algorithm>
 #include <cstdio>
-#include <string>
 #include <vector>
 
 #include "gatcore/character/data/bone_candidate_samples.hpp"
 #include "gatcore/character/data/training_data.hpp"
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/eval/weight_calibration.hpp"
-#include "gatcore/character/eval/weight_eval.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
-#include "gatcore/character/rig/blend_weights.hpp"
-#include "gatcore/character/rig/limit_weights.hpp"
-#include "gatcore/character/rig/super_skeleton.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/model.hpp"
 #include "gatcore/models/predict.hpp"
@@ -64,15 +59,16 @@ int main(int argc, char** argv) {
       const SkinWeights top = weights_from_candidates(c, models::top_k_renormalise(y, 4));
       BoneHeatParams bp;
       const SkinWeights heat = bone_heat_weights(pc.character, bp);
+      std::vector<float> confidence(std::size_t(y.rows()), 0.0f);  // each vertex's largest candidate probability
+      for (std::int64_t v = 0; v < y.rows(); ++v)
+        for (std::int64_t j = 0; j < y.cols(); ++j)
+          confidence[std::size_t(v)] = std::max(confidence[std::size_t(v)], y.at(v, j));
       std::vector<double> row(G, 0.0);
       for (std::size_t gi = 0; gi < gates.size(); ++gi) {
-        std::vector<char> take(std::size_t(y.rows()), 0);
+        std::vector<char> take(confidence.size(), 0);
         std::size_t n = 0;
-        for (std::int64_t v = 0; v < y.rows(); ++v) {
-          float mx = 0;
-          for (std::int64_t j = 0; j < y.cols(); ++j) mx = std::max(mx, y.at(v, j));
-          if (mx < gates[gi]) take[std::size_t(v)] = 1, ++n;
-        }
+        for (std::size_t v = 0; v < confidence.size(); ++v)
+          if (confidence[v] < gates[gi]) take[v] = 1, ++n;
         gated[gi] += double(n) / double(y.rows()) / double(chars.size());
         const std::vector<CalibrationPoint> points =
             score_postprocess_grid(td, ci, select_rows(top, heat, take), heat, grid);
