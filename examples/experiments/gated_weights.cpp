@@ -1,11 +1,16 @@
-// A confidence gate between skinweights-any and bone heat, measured before it
-// goes in the library (docs/experiments/skin-weights.md):
+// Two ways to combine skinweights-any with bone heat,
+// measured before either goes in the library (docs/experiments/skin-weights.md):
 //   gated_weights DATASET.json MODEL.gcm
-// Where the model's largest candidate probability at a vertex is below a
-// threshold, the vertex takes bone heat's weights instead of the model's; the
-// threshold, the heat blend and the min weight are chosen together on the
-// dataset's validation characters (gat calibrate's grid for the last two),
-// then the test characters are scored with gat eval's metric.
+// - a confidence gate: where the model's largest candidate probability at a
+//   vertex is below a threshold, the vertex takes bone heat's weights; the
+//   threshold, the heat blend and the min weight are chosen together on the
+//   dataset's validation characters (gat calibrate's grid for the last two);
+// - the correction scaled: heat + s * (model - heat), s in [0, 4], negative
+//   weights dropped and the top 4 renormalised (s < 1 is a heat blend of 1 - s;
+//   s > 1 pushes further from bone heat than the model does), the min weight
+//   chosen on the validation characters.
+// The test characters are then scored with gat eval's metric, and each one's
+// mean largest candidate probability is printed beside the validation mean.
 #include <algorithm>
 #include <cstdio>
 #include <vector>
@@ -22,6 +27,29 @@
 
 using namespace gatcore;
 using namespace gatcore::character;
+
+// heat + s * (model - heat) per vertex over the character's J joints, negative
+// weights dropped, the largest 4 renormalised.
+static SkinWeights scaled_correction(const SkinWeights& model, const SkinWeights& heat, std::int32_t J, float s) {
+  const std::vector<float> a = model.dense(J), b = heat.dense(J);
+  SkinWeights out;
+  out.ptr.assign(1, 0);
+  std::vector<std::pair<float, std::int32_t>> row;
+  for (std::int64_t v = 0; v < model.num_vertices(); ++v) {
+    row.clear();
+    for (std::int32_t j = 0; j < J; ++j) {
+      const std::size_t i = std::size_t(v) * std::size_t(J) + std::size_t(j);
+      if (const float x = b[i] + s * (a[i] - b[i]); x > 0) row.push_back({x, j});
+    }
+    std::sort(row.begin(), row.end(), [](const auto& p, const auto& q) { return p.first > q.first; });
+    if (row.size() > 4) row.resize(4);
+    float sum = 0;
+    for (const auto& p : row) sum += p.first;
+    for (const auto& p : row) out.joint.push_back(p.second), out.weight.push_back(p.first / sum);
+    out.ptr.push_back(std::int64_t(out.joint.size()));
+  }
+  return out;
+}
 
 // Rows of `a`, except where `take_b` is set: rows of `b`.
 static SkinWeights select_rows(const SkinWeights& a, const SkinWeights& b, const std::vector<char>& take_b) {
@@ -47,10 +75,16 @@ int main(int argc, char** argv) {
   const std::vector<float>&mins = grid.min_weights, &blends = grid.heat_blends;
   const std::vector<float> gates{0.0f, 0.3f, 0.4f, 0.5f, 0.6f, 0.7f, 0.8f, 0.9f, 1.01f};
   const std::size_t G = gates.size() * blends.size() * mins.size();
+  const std::vector<float> scales{0.0f, 0.25f, 0.5f, 0.75f, 1.0f, 1.25f, 1.5f, 2.0f, 3.0f, 4.0f};
+  CalibrationGrid mins_only = grid;
+  mins_only.heat_blends = {0.0f};
+  const std::size_t S = scales.size() * mins.size();
   auto run_part = [&](DatasetPart part, std::vector<double>& l1, std::vector<double>& dom, std::vector<double>& gated,
+                      std::vector<double>& scaled, double& confidence_mean,
                       std::vector<std::vector<double>>* per_char) {
     const auto& chars = td.part(part);
-    l1.assign(G, 0.0), dom.assign(G, 0.0), gated.assign(gates.size(), 0.0);
+    l1.assign(G, 0.0), dom.assign(G, 0.0), gated.assign(gates.size(), 0.0), scaled.assign(S, 0.0);
+    confidence_mean = 0;
     for (const std::int32_t ci : chars) {
       const PreparedCharacter& pc = td.characters[std::size_t(ci)];
       BoneCandidates c;
@@ -63,7 +97,11 @@ int main(int argc, char** argv) {
       for (std::int64_t v = 0; v < y.rows(); ++v)
         for (std::int64_t j = 0; j < y.cols(); ++j)
           confidence[std::size_t(v)] = std::max(confidence[std::size_t(v)], y.at(v, j));
-      std::vector<double> row(G, 0.0);
+      double mean = 0;
+      for (const float p : confidence) mean += p / double(confidence.size());
+      confidence_mean += mean / double(chars.size());
+      std::vector<double> row(G + 1, 0.0);
+      row[G] = mean;
       for (std::size_t gi = 0; gi < gates.size(); ++gi) {
         std::vector<char> take(confidence.size(), 0);
         std::size_t n = 0;
@@ -80,13 +118,19 @@ int main(int argc, char** argv) {
         }
       }
       if (per_char) per_char->push_back(row);
+      for (std::size_t si = 0; si < scales.size(); ++si) {
+        const SkinWeights w = scaled_correction(top, heat, pc.character.skeleton.num_joints(), scales[si]);
+        const std::vector<CalibrationPoint> points = score_postprocess_grid(td, ci, w, heat, mins_only);
+        for (std::size_t i = 0; i < points.size(); ++i) scaled[si * mins.size() + i] += points[i].l1 / double(chars.size());
+      }
       std::fprintf(stderr, ".");
     }
   };
-  std::vector<double> vl1, vdom, vg, tl1, tdom, tg;
+  std::vector<double> vl1, vdom, vg, vs, tl1, tdom, tg, ts;
+  double vconf = 0, tconf = 0;
   std::vector<std::vector<double>> tchar;
-  run_part(DatasetPart::validation, vl1, vdom, vg, nullptr);
-  run_part(DatasetPart::test, tl1, tdom, tg, &tchar);
+  run_part(DatasetPart::validation, vl1, vdom, vg, vs, vconf, nullptr);
+  run_part(DatasetPart::test, tl1, tdom, tg, ts, tconf, &tchar);
   std::fprintf(stderr, "\n");
   const std::size_t per_gate = blends.size() * mins.size();
   std::size_t best = 0, best0 = 0;
@@ -101,8 +145,15 @@ int main(int argc, char** argv) {
     for (std::size_t g = gi * per_gate; g < (gi + 1) * per_gate; ++g) if (vl1[g] < vl1[b]) b = g;
     std::printf("  %.2f %.3f %.3f %.4f %.4f %.3f\n", double(gates[gi]), vg[gi], tg[gi], vl1[b], tl1[b], tdom[b]);
   }
-  std::printf("test per character at chosen / no gate:");
-  for (const auto& r : tchar) std::printf(" %.3f/%.3f", r[best], r[best0]);
+  std::printf("test per character, L1 at chosen / no gate (mean largest candidate probability; validation %.3f):",
+              vconf);
+  for (const auto& r : tchar) std::printf(" %.3f/%.3f (%.2f)", r[best], r[best0], r[G]);
   std::printf("\n");
+  std::printf("correction scaled (min weight best on validation): scale min val test\n");
+  for (std::size_t si = 0; si < scales.size(); ++si) {
+    std::size_t b = si * mins.size();
+    for (std::size_t g = b; g < (si + 1) * mins.size(); ++g) if (vs[g] < vs[b]) b = g;
+    std::printf("  %.2f %.3g %.4f %.4f\n", double(scales[si]), double(mins[b % mins.size()]), vs[b], ts[b]);
+  }
   return 0;
 }
