@@ -10,7 +10,8 @@
 //   s > 1 pushes further from bone heat than the model does), the min weight
 //   chosen on the validation characters.
 // The test characters are then scored with gat eval's metric, and each one's
-// mean largest candidate probability is printed beside the validation mean.
+// mean largest candidate probability is printed beside the validation and
+// test means.
 #include <algorithm>
 #include <cstdio>
 #include <vector>
@@ -145,8 +146,9 @@ int main(int argc, char** argv) {
     for (std::size_t g = gi * per_gate; g < (gi + 1) * per_gate; ++g) if (vl1[g] < vl1[b]) b = g;
     std::printf("  %.2f %.3f %.3f %.4f %.4f %.3f\n", double(gates[gi]), vg[gi], tg[gi], vl1[b], tl1[b], tdom[b]);
   }
-  std::printf("test per character, L1 at chosen / no gate (mean largest candidate probability; validation %.3f):",
-              vconf);
+  std::printf("test per character, L1 at chosen / no gate (mean largest candidate probability; validation %.3f, "
+              "test %.3f):",
+              vconf, tconf);
   for (const auto& r : tchar) std::printf(" %.3f/%.3f (%.2f)", r[best], r[best0], r[G]);
   std::printf("\n");
   std::printf("correction scaled (min weight best on validation): scale min val test\n");
