@@ -21,6 +21,7 @@
 #include "gatcore/character/deform/bone_heat.hpp"
 #include "gatcore/character/eval/weight_calibration.hpp"
 #include "gatcore/character/features/bone_candidates.hpp"
+#include "gatcore/character/rig/limit_weights.hpp"
 #include "gatcore/models/checkpoint.hpp"
 #include "gatcore/models/model.hpp"
 #include "gatcore/models/predict.hpp"
@@ -35,21 +36,12 @@ static SkinWeights scaled_correction(const SkinWeights& model, const SkinWeights
   const std::vector<float> a = model.dense(J), b = heat.dense(J);
   SkinWeights out;
   out.ptr.assign(1, 0);
-  std::vector<std::pair<float, std::int32_t>> row;
-  for (std::int64_t v = 0; v < model.num_vertices(); ++v) {
-    row.clear();
-    for (std::int32_t j = 0; j < J; ++j) {
-      const std::size_t i = std::size_t(v) * std::size_t(J) + std::size_t(j);
-      if (const float x = b[i] + s * (a[i] - b[i]); x > 0) row.push_back({x, j});
-    }
-    std::sort(row.begin(), row.end(), [](const auto& p, const auto& q) { return p.first > q.first; });
-    if (row.size() > 4) row.resize(4);
-    float sum = 0;
-    for (const auto& p : row) sum += p.first;
-    for (const auto& p : row) out.joint.push_back(p.second), out.weight.push_back(p.first / sum);
-    out.ptr.push_back(std::int64_t(out.joint.size()));
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (const float x = b[i] + s * (a[i] - b[i]); x > 0)
+      out.joint.push_back(std::int32_t(i % std::size_t(J))), out.weight.push_back(x);
+    if ((i + 1) % std::size_t(J) == 0) out.ptr.push_back(std::int64_t(out.joint.size()));
   }
-  return out;
+  return limit_weights(out, 4);
 }
 
 // Rows of `a`, except where `take_b` is set: rows of `b`.
