@@ -8,7 +8,7 @@
 #       [--sampling consecutive|random|full] [--pair-scorer W,...] [--world-columns ignore|use]
 #       [--precision fp32|bf16] [--lr-schedule step|cosine|plateau] [--average-decay D] [--classifier-dropout P] [--loss kl|l1]
 #       [--seed S] [--heat-blend S] [--augment KINDS [--augment-copies N]]
-#       [--corpus use|ignore|auto] [--evaluate-only] [--out DIR] [--data DIR] [--gat BIN]
+#       [--corpus use|ignore|auto] [--validation-family FAM] [--evaluate-only] [--out DIR] [--data DIR] [--gat BIN]
 #
 # Folds (test family; every other family trains, one character of each
 # training family validates):
@@ -55,6 +55,10 @@
 # (a heat blend and a min weight) on the fold's validation characters; the
 # method skinweights-any is the calibrated checkpoint, skinweights-any-raw the
 # model's own top-4 weights.
+# --validation-family FAM validates on every character of FAM (a family the
+# fold would train on) and trains on none of them, instead of one character
+# of each training family: the kept epoch and the calibration are then
+# chosen on a family the model never saw, as the test family is.
 # --heat-blend S also evaluates the uncalibrated checkpoint with its weights
 # mixed with bone heat's, (1 - S) * model + S * bone heat per vertex (gat eval
 # --heat-blend), as the method skinweights-any+heat in the tables.
@@ -92,7 +96,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 folds="women creatures khronos" minutes=8 seed=7 poses=16 sampling=consecutive pair_scorer= world_columns= precision=fp32
-heat_blend= augment= augment_copies=2 corpus=auto evaluate_only=0 lr_schedule= average_decay= classifier_dropout= loss=
+heat_blend= validation_family= augment= augment_copies=2 corpus=auto evaluate_only=0 lr_schedule= average_decay= classifier_dropout= loss=
 out="$root/build/experiments/unseen_skeletons"
 data="${GATCORE_DATA:-$root/../shared/data}"
 gat="$root/build/tools/gat"
@@ -113,6 +117,7 @@ while [ $# -gt 0 ]; do
     --loss) loss="${2:?--loss needs kl or l1}"; shift 2 ;;
     --heat-blend) heat_blend="${2:?--heat-blend needs a share in (0, 1]}"; shift 2 ;;
     --evaluate-only) evaluate_only=1; shift ;;
+    --validation-family) validation_family="${2:?--validation-family needs a family}"; shift 2 ;;
     --corpus) corpus="${2:?--corpus needs use, ignore or auto}"; shift 2 ;;
     --augment) augment="${2:?--augment needs a list of kinds}"; shift 2 ;;
     --augment-copies) augment_copies="${2:?--augment-copies needs a count}"; shift 2 ;;
@@ -250,6 +255,12 @@ for fold in $folds; do
   fi
   mkdir -p "$dir"
   files=() val="" test=""
+  if [ -n "$validation_family" ]; then
+    case " $(echo $(train_families "$fold")) " in
+      *" $validation_family "*) ;;
+      *) die "--validation-family $validation_family is not one of the $fold fold's training families: $(echo $(train_families "$fold"))" ;;
+    esac
+  fi
   for fam in $(train_families "$fold") $(test_family "$fold"); do
     first=1
     for f in $(family_files "$fam"); do
@@ -262,6 +273,8 @@ for fold in $folds; do
           modular_men/Casual.glb | modular_women/Casual.glb) val="${val:+$val,}$name" ;;
         esac
       elif [ "$fam" = "$(test_family "$fold")" ]; then test="${test:+$test,}$name"
+      elif [ -n "$validation_family" ]; then
+        [ "$fam" = "$validation_family" ] && val="${val:+$val,}$name"
       elif [ $first = 1 ]; then val="${val:+$val,}$name"; first=0; fi
     done
   done
