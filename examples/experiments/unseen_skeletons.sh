@@ -244,6 +244,16 @@ test_family() {
   esac
 }
 
+# Every fold's --validation-family is checked before any fold trains.
+if [ -n "$validation_family" ]; then
+  for fold in $folds; do
+    case " $(echo $(train_families "$fold")) " in
+      *" $validation_family "*) ;;
+      *) die "--validation-family $validation_family is not one of the $fold fold's training families: $(echo $(train_families "$fold"))" ;;
+    esac
+  done
+fi
+
 for fold in $folds; do
   dir="$out/$fold"
   if [ "$evaluate_only" = 1 ]; then
@@ -255,12 +265,6 @@ for fold in $folds; do
   fi
   mkdir -p "$dir"
   files=() val="" test=""
-  if [ -n "$validation_family" ]; then
-    case " $(echo $(train_families "$fold")) " in
-      *" $validation_family "*) ;;
-      *) die "--validation-family $validation_family is not one of the $fold fold's training families: $(echo $(train_families "$fold"))" ;;
-    esac
-  fi
   for fam in $(train_families "$fold") $(test_family "$fold"); do
     first=1
     for f in $(family_files "$fam"); do
